@@ -1,0 +1,13 @@
+# pepper_target_defaults(<target>): warnings (errors with PEPPER_WERROR) and sanitizers for our own code only.
+function(pepper_target_defaults target)
+  target_compile_features(${target} PUBLIC cxx_std_20)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+  if(PEPPER_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(PEPPER_SANITIZERS)
+    list(JOIN PEPPER_SANITIZERS "," _san)
+    target_compile_options(${target} PRIVATE -fsanitize=${_san} -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=${_san})
+  endif()
+endfunction()

@@ -1,0 +1,50 @@
+#pragma once
+// Pinhole intrinsics of the camera, in pixels, for one image size.
+//
+// Normalised coordinates (METHOD.md, "Setting"): x_norm = (u_px - cx_px) / fx_px,
+// y_norm = (v_px - cy_px) / fy_px. Camera axes: x right, y down, z forward (docs/conventions.md).
+// Distortion is not modelled: Pepper's top camera has kud ~ 0.03 (PEPPER.md), negligible for
+// the qualitative servoing of the method.
+//
+// Invariant (checked by validate()): width_px, height_px > 0; fx_px, fy_px > 0 and finite;
+// cx_px, cy_px finite.
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core/types.hpp>
+
+namespace pepper::core {
+
+struct CameraIntrinsics {
+  int width_px = 0;
+  int height_px = 0;
+  double fx_px = 0.0;
+  double fy_px = 0.0;
+  double cx_px = 0.0;
+  double cy_px = 0.0;
+
+  /// Pepper's top head camera at VGA (640x480). Source: the public QVGA calibration of a Pepper
+  /// top camera (fx 298.13, fy 298.72, cx 159.15, cy 118.91; PEPPER.md) scaled to VGA with
+  /// scaled_to(): fx 596.26, fy 597.44, cx 318.8, cy 238.32.
+  static CameraIntrinsics pepper_top_vga();
+
+  /// Same camera for another image size: focal lengths and principal point scale with the size
+  /// (assumes the sensor is binned or scaled, not cropped, as ALVideoDevice does). Pixel centres
+  /// are at integer coordinates, so c' = (c + 0.5) * s - 0.5.
+  CameraIntrinsics scaled_to(int new_width_px, int new_height_px) const;
+
+  /// Messages naming each invalid field and its allowed range; empty when valid.
+  std::vector<std::string> validate() const;
+
+  cv::Point2d normalize(const cv::Point2d& p_px) const {
+    return {(p_px.x - cx_px) / fx_px, (p_px.y - cy_px) / fy_px};
+  }
+  cv::Point2d denormalize(const cv::Point2d& p_norm) const {
+    return {p_norm.x * fx_px + cx_px, p_norm.y * fy_px + cy_px};
+  }
+
+  bool operator==(const CameraIntrinsics&) const = default;
+};
+
+}  // namespace pepper::core

@@ -1,0 +1,103 @@
+#pragma once
+// RobotBridge: the one interface through which the app talks to a robot, real or simulated.
+//
+// Implementations: QiBridge (real Pepper over qi messaging, tcp:// or tcps://), MockBridge
+// (in-process simulated robot, no sockets) and QiBridge pointed at our mock NAOqi server.
+//
+// Units and frames (docs/conventions.md): base velocities in the robot frame, x forward, y left,
+// omega > 0 turns left (counter-clockwise seen from above), as ALMotion.move(x, y, theta).
+//
+// Threading: every method may be called from the app's session thread; implementations guard
+// their own state. stop() may additionally be called from any thread (signal handler relay,
+// watchdog, UI) and must be safe to call at any time, any number of times.
+//
+// Failure: environment problems (lost connection, refused call) throw BridgeError (or a subclass)
+// from the calling method. stop() never throws: it makes a best effort and reports through state().
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "core/camera/intrinsics.hpp"
+#include "core/frame.hpp"
+
+namespace pepper::naoqi_bridge {
+
+/// Any failure to reach or use the robot. `what()` names the service/method where it applies.
+class BridgeError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Velocity of the base in the robot frame.
+struct BaseVelocity {
+  double v_x_m_s = 0.0;      ///< forward, m/s
+  double v_y_m_s = 0.0;      ///< left, m/s (our controllers keep it 0: unicycle)
+  double omega_rad_s = 0.0;  ///< yaw rate, rad/s, > 0 turns left
+};
+
+/// What the app asks of the camera stream.
+struct CameraRequest {
+  int camera_index = 0;  ///< 0 = top head camera (CameraTop)
+  int width_px = 640;    ///< 640x480 (kVGA) by default; 320x240 (kQVGA) also supported
+  int height_px = 480;
+  int fps = 15;
+};
+
+/// Head and leg joints held fixed so that the camera is rigid on the base.
+struct HeadLockRequest {
+  double head_yaw_rad = 0.0;
+  double head_pitch_rad = 0.0;  ///< > 0 looks down (URDF range -0.707 .. 0.637)
+  double tolerance_rad = 0.05;  ///< read-back error above which the lock counts as not holding
+};
+
+struct HeadLockStatus {
+  bool holding = false;          ///< every locked joint within tolerance of its target
+  double head_yaw_rad = 0.0;     ///< read back from the robot
+  double head_pitch_rad = 0.0;   ///< read back from the robot
+  double max_error_rad = 0.0;    ///< largest |target - measured| over the locked joints
+};
+
+enum class ConnectionState { kDisconnected, kConnecting, kConnected, kLost };
+
+const char* to_string(ConnectionState state);
+
+class RobotBridge {
+ public:
+  virtual ~RobotBridge() = default;
+  RobotBridge() = default;
+  RobotBridge(const RobotBridge&) = delete;
+  RobotBridge& operator=(const RobotBridge&) = delete;
+
+  /// Opens the connection (and logs in where needed). Throws BridgeError on failure.
+  virtual void connect() = 0;
+
+  /// Starts streaming frames with the given request; returns the intrinsics of the delivered size.
+  virtual core::CameraIntrinsics start_camera(const CameraRequest& request) = 0;
+
+  /// The next frame newer than the previous one returned, or nullopt if none arrived within
+  /// `timeout`. Frames carry the robot's capture timestamp. Throws BridgeError on a lost link.
+  virtual std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) = 0;
+
+  /// Stiffens and holds head (and hip/knee) joints, turns autonomous head motion off, and reads
+  /// the angles back. The previous autonomy state is restored by release().
+  virtual HeadLockStatus lock_head(const HeadLockRequest& request) = 0;
+
+  /// Commands a base velocity (lasts until the next command; implementations add a watchdog).
+  virtual void move(const BaseVelocity& velocity) = 0;
+
+  /// Stops the base now (move(0,0,0) then stopMove on a real robot). Never throws.
+  virtual void stop() noexcept = 0;
+
+  /// Stops the base, unsubscribes the camera and restores autonomy settings. Never throws.
+  virtual void release() noexcept = 0;
+
+  virtual ConnectionState state() const = 0;
+
+  /// Human-readable description of where the bridge is connected, e.g. "tcp://10.0.0.5:9559".
+  virtual std::string describe() const = 0;
+};
+
+}  // namespace pepper::naoqi_bridge
