@@ -1,0 +1,205 @@
+#include "session/recording.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace pepper::app {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kFormat = "pepper-recording";
+constexpr int kVersion = 1;
+
+json camera_to_json(const core::CameraIntrinsics& k) {
+  return json{{"width_px", k.width_px}, {"height_px", k.height_px}, {"fx_px", k.fx_px},
+              {"fy_px", k.fy_px},       {"cx_px", k.cx_px},         {"cy_px", k.cy_px}};
+}
+
+core::CameraIntrinsics camera_from_json(const json& j, const fs::path& file) {
+  core::CameraIntrinsics k;
+  try {
+    k.width_px = j.at("width_px").get<int>();
+    k.height_px = j.at("height_px").get<int>();
+    k.fx_px = j.at("fx_px").get<double>();
+    k.fy_px = j.at("fy_px").get<double>();
+    k.cx_px = j.at("cx_px").get<double>();
+    k.cy_px = j.at("cy_px").get<double>();
+  } catch (const json::exception& e) {
+    throw RecordingError(file.string() + ": camera: " + e.what());
+  }
+  const auto errors = k.validate();
+  if (!errors.empty()) throw RecordingError(file.string() + ": camera: " + errors.front());
+  return k;
+}
+
+void write_file_atomically(const fs::path& path, const std::string& content) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw RecordingError(tmp.string() + ": cannot open for writing");
+    out << content;
+    out.flush();
+    if (!out) throw RecordingError(tmp.string() + ": write failed (disk full?)");
+  }
+  fs::rename(tmp, path);
+}
+
+bool is_image_file(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm" ||
+         ext == ".ppm";
+}
+
+}  // namespace
+
+RecordingWriter::RecordingWriter(fs::path folder, const core::CameraIntrinsics& camera,
+                                 const std::string& source, const std::string& config_json)
+    : folder_(std::move(folder)) {
+  if (fs::exists(folder_) && !fs::is_empty(folder_)) {
+    throw RecordingError(folder_.string() + ": recording folder exists and is not empty");
+  }
+  std::error_code ec;
+  fs::create_directories(folder_ / "frames", ec);
+  if (ec) throw RecordingError(folder_.string() + ": cannot create: " + ec.message());
+  json config = json::parse(config_json, nullptr, /*allow_exceptions=*/false);
+  if (config.is_discarded()) config = json::object();
+  const json manifest{{"format", kFormat}, {"version", kVersion},
+                      {"camera", camera_to_json(camera)}, {"source", source},
+                      {"config", config}};
+  write_file_atomically(folder_ / "recording.json", manifest.dump(2) + "\n");
+  index_.open(folder_ / "frames.jsonl", std::ios::app);
+  if (!index_) throw RecordingError((folder_ / "frames.jsonl").string() + ": cannot open");
+}
+
+void RecordingWriter::append(const core::Frame& frame, double v_m_s, double omega_rad_s) {
+  if (frame.gray.empty() || frame.gray.type() != CV_8UC1) {
+    throw RecordingError("recording: frame " + std::to_string(count_) + " is not 8-bit grey");
+  }
+  std::ostringstream name;
+  name << "frames/" << std::setw(6) << std::setfill('0') << count_ << ".png";
+  const fs::path final_path = folder_ / name.str();
+  const fs::path tmp_path = folder_ / (name.str() + ".tmp.png");
+  if (!cv::imwrite(tmp_path.string(), frame.gray)) {
+    throw RecordingError(tmp_path.string() + ": cannot write frame");
+  }
+  fs::rename(tmp_path, final_path);
+  const json line{{"index", count_}, {"t_ns", frame.t_ns}, {"file", name.str()},
+                  {"v_m_s", v_m_s},  {"omega_rad_s", omega_rad_s}};
+  index_ << line.dump() << '\n';
+  index_.flush();
+  if (!index_) throw RecordingError((folder_ / "frames.jsonl").string() + ": write failed");
+  ++count_;
+}
+
+Recording read_recording(const fs::path& folder,
+                         const std::optional<core::CameraIntrinsics>& camera_override,
+                         double nominal_fps) {
+  if (!fs::is_directory(folder)) {
+    throw RecordingError(folder.string() + ": not a folder");
+  }
+  Recording rec;
+  rec.folder = folder;
+  const fs::path manifest_path = folder / "recording.json";
+  if (fs::exists(manifest_path)) {
+    std::ifstream in(manifest_path);
+    json manifest = json::parse(in, nullptr, /*allow_exceptions=*/false);
+    if (manifest.is_discarded() || !manifest.is_object()) {
+      throw RecordingError(manifest_path.string() + ": not valid JSON");
+    }
+    if (manifest.value("format", "") != kFormat) {
+      throw RecordingError(manifest_path.string() + ": not a pepper recording (format field)");
+    }
+    if (manifest.value("version", 0) != kVersion) {
+      throw RecordingError(manifest_path.string() + ": unsupported version " +
+                           manifest.value("version", json(0)).dump() + " (this build reads " +
+                           std::to_string(kVersion) + ")");
+    }
+    rec.camera = camera_override ? *camera_override
+                                 : camera_from_json(manifest.value("camera", json()), manifest_path);
+    rec.source = manifest.value("source", "");
+    const fs::path index_path = folder / "frames.jsonl";
+    std::ifstream index(index_path);
+    if (!index) throw RecordingError(index_path.string() + ": missing");
+    std::string line;
+    int line_no = 0;
+    while (std::getline(index, line)) {
+      ++line_no;
+      if (line.empty()) continue;
+      json j = json::parse(line, nullptr, false);
+      if (j.is_discarded() || !j.is_object() || !j.contains("file")) {
+        if (index.peek() == EOF) {
+          rec.warnings.push_back(index_path.string() + ": line " + std::to_string(line_no) +
+                                 " is incomplete (interrupted write); skipped");
+          break;
+        }
+        throw RecordingError(index_path.string() + ": line " + std::to_string(line_no) +
+                             " is not a frame record");
+      }
+      RecordedFrame f;
+      f.index = j.value("index", static_cast<int64_t>(rec.frames.size()));
+      f.t_ns = j.value("t_ns", int64_t{0});
+      f.file = folder / j["file"].get<std::string>();
+      f.v_m_s = j.value("v_m_s", 0.0);
+      f.omega_rad_s = j.value("omega_rad_s", 0.0);
+      rec.frames.push_back(std::move(f));
+    }
+  } else {
+    if (!camera_override) {
+      throw RecordingError(folder.string() +
+                           ": no recording.json here; for a plain image folder give the camera "
+                           "intrinsics with --camera FILE");
+    }
+    rec.camera = *camera_override;
+    rec.source = "plain image folder";
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      if (entry.is_regular_file() && is_image_file(entry.path())) files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    if (!(nominal_fps > 0.0)) throw RecordingError("nominal_fps must be > 0");
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      RecordedFrame f;
+      f.index = static_cast<int64_t>(i);
+      f.t_ns = static_cast<int64_t>(static_cast<double>(i) * 1e9 / nominal_fps);
+      f.file = files[i];
+      rec.frames.push_back(std::move(f));
+    }
+  }
+  if (rec.frames.empty()) throw RecordingError(folder.string() + ": recording has no frames");
+  return rec;
+}
+
+core::Frame load_frame(const Recording& recording, std::size_t i) {
+  if (i >= recording.frames.size()) {
+    throw RecordingError("frame " + std::to_string(i) + " out of range (recording has " +
+                         std::to_string(recording.frames.size()) + ")");
+  }
+  const RecordedFrame& rf = recording.frames[i];
+  cv::Mat image = cv::imread(rf.file.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw RecordingError(rf.file.string() + ": missing or unreadable image");
+  cv::Mat gray;
+  if (image.channels() == 3) {
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  } else if (image.channels() == 4) {
+    cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY);
+  } else {
+    gray = image;
+  }
+  if (gray.depth() != CV_8U) gray.convertTo(gray, CV_8U, 1.0 / 256.0);
+  core::Frame frame;
+  frame.gray = gray;
+  frame.t_ns = rf.t_ns;
+  frame.index = rf.index;
+  return frame;
+}
+
+}  // namespace pepper::app

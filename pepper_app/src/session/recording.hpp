@@ -1,0 +1,84 @@
+#pragma once
+// Recordings of teach sessions: what the camera saw, frame by frame, kept so that an interrupted
+// session (Ctrl-C, crash, lost robot) can still be turned into a map later (`map build`).
+//
+// Layout of a recording folder (format "pepper-recording", version 1):
+//   recording.json   manifest: format, version, camera intrinsics, source URL, start time,
+//                    free-form "config" (the effective configuration). Written atomically at start.
+//   frames.jsonl     one JSON object per line and per frame, appended and flushed as frames come:
+//                    {"index": i, "t_ns": t, "file": "frames/000123.png",
+//                     "v_m_s": v, "omega_rad_s": w}   (the command in force when it was taken)
+//   frames/NNNNNN.png  the grey frames, each written to a temp name and renamed before its index
+//                    line is appended, so every indexed frame is complete.
+// A crash can at worst leave a partial last line in frames.jsonl; the reader skips it and says so.
+//
+// A plain folder of images (png/jpg/jpeg/bmp/pgm/ppm, taken in name order) is also accepted as a
+// recording; its camera comes from a separate file and its timestamps from a nominal rate.
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/camera/intrinsics.hpp"
+#include "core/frame.hpp"
+
+namespace pepper::app {
+
+/// A recording that cannot be read or written; what() names the file.
+class RecordingError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RecordedFrame {
+  int64_t index = 0;
+  int64_t t_ns = 0;
+  std::filesystem::path file;  ///< absolute or relative to the recording folder
+  double v_m_s = 0.0;          ///< command in force when the frame was taken (0 when unknown)
+  double omega_rad_s = 0.0;
+};
+
+class RecordingWriter {
+ public:
+  /// Creates `folder` (must not exist or be empty) and writes the manifest.
+  RecordingWriter(std::filesystem::path folder, const core::CameraIntrinsics& camera,
+                  const std::string& source, const std::string& config_json = "{}");
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  /// Writes the frame's PNG (atomically) and appends its index line (flushed).
+  void append(const core::Frame& frame, double v_m_s, double omega_rad_s);
+
+  int64_t frame_count() const { return count_; }
+  const std::filesystem::path& folder() const { return folder_; }
+
+ private:
+  std::filesystem::path folder_;
+  std::ofstream index_;
+  int64_t count_ = 0;
+};
+
+struct Recording {
+  std::filesystem::path folder;
+  core::CameraIntrinsics camera;
+  std::string source;                 ///< where it was recorded ("plain image folder" otherwise)
+  std::vector<RecordedFrame> frames;  ///< in order
+  std::vector<std::string> warnings;  ///< e.g. a partial last index line that was skipped
+};
+
+/// Reads a recording folder (ours, or a plain image folder when `camera_override` is given or the
+/// folder has no manifest). Plain folders get t_ns = i * 1e9 / nominal_fps.
+/// Throws RecordingError naming the file on any problem (missing camera for a plain folder, bad
+/// manifest, missing frame file, no frames).
+Recording read_recording(const std::filesystem::path& folder,
+                         const std::optional<core::CameraIntrinsics>& camera_override,
+                         double nominal_fps = 15.0);
+
+/// Loads one recorded frame as 8-bit grey (colour images are converted). Throws RecordingError.
+core::Frame load_frame(const Recording& recording, std::size_t i);
+
+}  // namespace pepper::app
