@@ -1,0 +1,219 @@
+// World files: every shipped world loads, validates and has a drivable taught path; malformed
+// files give errors that name the file, the line and the key.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "naoqi_bridge/mock/world.hpp"
+
+namespace pepper::naoqi_bridge::mock {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+const std::filesystem::path kWorlds = std::filesystem::path(PEPPER_SOURCE_DIR) / "worlds";
+
+std::vector<std::filesystem::path> shipped_worlds() {
+  std::vector<std::filesystem::path> out;
+  for (const auto& e : std::filesystem::directory_iterator(kWorlds))
+    if (e.path().extension() == ".yaml") out.push_back(e.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(World, AtLeastFourWorldsShipped) {
+  const auto worlds = shipped_worlds();
+  EXPECT_GE(worlds.size(), 4u);
+  for (const char* name : {"robotics_room.yaml", "room_corridor_room.yaml", "white_corridor.yaml",
+                           "window_corridor.yaml"})
+    EXPECT_TRUE(std::filesystem::exists(kWorlds / name)) << name;
+}
+
+TEST(World, EveryShippedWorldLoadsWithADrivableTaughtPath) {
+  for (const auto& file : shipped_worlds()) {
+    SCOPED_TRACE(file.string());
+    World w;
+    ASSERT_NO_THROW(w = load_world(file));
+    EXPECT_GT(w.quads.size(), 20u);
+    EXPECT_GE(w.walls.size(), 4u);
+    EXPECT_TRUE(w.lighting.count("teach"));
+    EXPECT_TRUE(w.lighting.count("replay"));
+    ASSERT_GE(w.scenario.waypoints_m.size(), 2u);
+    EXPECT_GT(w.scenario.path_length_m(), 10.0);
+    // Every point of the taught path keeps a 0.3 m robot clear of every obstacle, with margin.
+    const auto& p = w.scenario.waypoints_m;
+    for (size_t i = 1; i < p.size(); ++i) {
+      for (double f = 0.0; f <= 1.0; f += 0.01) {
+        const Eigen::Vector2d q = p[i - 1] + f * (p[i] - p[i - 1]);
+        const auto hit = w.collision(q, 0.35, 0.0);
+        EXPECT_FALSE(hit.has_value())
+            << "segment " << i << " at " << q.transpose() << " hits " << hit.value_or("");
+      }
+    }
+    for (const Pose2D& s : w.scenario.replay_starts)
+      EXPECT_FALSE(w.collision({s.x_m, s.y_m}, 0.3, 0.0).has_value());
+    for (const Texture& t : w.textures) {
+      EXPECT_GT(t.levels(), 4) << t.name();
+      EXPECT_LE(t.width_px(), 1024) << t.name();
+    }
+  }
+}
+
+TEST(World, CorridorWorldHasTwoRightAngleTurnsOverAbout22m) {
+  const World w = load_world(kWorlds / "room_corridor_room.yaml");
+  EXPECT_NEAR(w.scenario.path_length_m(), 22.0, 1.0);
+  const auto& p = w.scenario.waypoints_m;
+  int right_angles = 0;
+  for (size_t i = 1; i + 1 < p.size(); ++i) {
+    const Eigen::Vector2d a = (p[i] - p[i - 1]).normalized(), b = (p[i + 1] - p[i]).normalized();
+    if (std::abs(a.dot(b)) < 1e-6) ++right_angles;
+  }
+  EXPECT_EQ(right_angles, 2);
+}
+
+TEST(World, WindowCorridorLightDiffersBetweenTeachAndReplay) {
+  const World w = load_world(kWorlds / "window_corridor.yaml");
+  EXPECT_NE(w.light("teach").ambient, w.light("replay").ambient);
+  EXPECT_NE(w.light("teach").windows, w.light("replay").windows);
+  EXPECT_THROW(w.light("dusk"), WorldError);
+}
+
+const char* kMinimal = R"(
+textures:
+  paint: {type: noise, mean: 180, contrast: 10}
+floor: {texture: paint}
+walls:
+  - points: [[0, 0], [4, 0], [4, 3], [0, 3]]
+    closed: true
+    texture: paint
+)";
+
+TEST(World, MinimalWorldParses) {
+  const World w = parse_world(kMinimal, "mem.yaml", kWorlds);
+  EXPECT_EQ(w.walls.size(), 4u);
+  EXPECT_EQ(w.name, "mem");
+  EXPECT_TRUE(w.collision({0.1, 1.5}, 0.3, 0.0).has_value());
+  EXPECT_FALSE(w.collision({2.0, 1.5}, 0.3, 0.0).has_value());
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    parse_world(yaml, "bad_world.yaml", kWorlds);
+  } catch (const WorldError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(World, BadNumberNamesFileLineAndKey) {
+  const std::string yaml = std::string(kMinimal) + "    height_m: tall\n";
+  // Line 9 of the text (the leading newline is line 1).
+  EXPECT_THAT(error_of(yaml), AllOf(HasSubstr("bad_world.yaml:9"), HasSubstr("walls[0].height_m"),
+                                    HasSubstr("expected a number")));
+}
+
+TEST(World, UnknownKeyIsRefusedByName) {
+  EXPECT_THAT(error_of(std::string(kMinimal) + "    hieght_m: 2.5\n"),
+              AllOf(HasSubstr("bad_world.yaml:9"), HasSubstr("walls[0].hieght_m"),
+                    HasSubstr("unknown key")));
+}
+
+TEST(World, UnknownTextureNamesKeyAndTexture) {
+  EXPECT_THAT(
+      error_of(R"(
+textures:
+  paint: {type: uniform}
+floor: {texture: carpet}
+walls:
+  - {points: [[0, 0], [1, 0]], texture: paint}
+)"),
+      AllOf(HasSubstr("bad_world.yaml:4"), HasSubstr("floor.texture"), HasSubstr("'carpet'")));
+}
+
+TEST(World, MissingImageFileIsReported) {
+  EXPECT_THAT(error_of(R"(
+textures:
+  photo: {type: image, file: textures/does_not_exist.jpg}
+floor: {texture: photo}
+walls:
+  - {points: [[0, 0], [1, 0]], texture: photo}
+)"),
+              AllOf(HasSubstr("textures.photo"), HasSubstr("does_not_exist.jpg")));
+}
+
+TEST(World, YamlSyntaxErrorNamesFileAndLine) {
+  EXPECT_THAT(error_of("textures:\n  paint: {type: uniform\nfloor: x\n"),
+              AllOf(HasSubstr("bad_world.yaml:"), HasSubstr("YAML syntax error")));
+}
+
+TEST(World, FeatureThatDoesNotFitTheWallIsRefused) {
+  const std::string yaml = std::string(kMinimal) + "    doors: [{at_m: 3.8, width_m: 0.9}]\n";
+  EXPECT_THAT(error_of(yaml), HasSubstr("walls[0].doors[0]"));
+}
+
+TEST(World, UnknownTextureTypeListsTheValidOnes) {
+  EXPECT_THAT(
+      error_of("textures:\n  a: {type: marble}\n"),
+      AllOf(HasSubstr("bad_world.yaml:2"), HasSubstr("textures.a.type"), HasSubstr("checker")));
+}
+
+TEST(World, StartInsideAWallIsRefused) {
+  const std::string yaml = std::string(kMinimal) + "teach: {waypoints: [[0.1, 1.5], [2, 1.5]]}\n";
+  EXPECT_THAT(error_of(yaml), HasSubstr("collides"));
+}
+
+TEST(World, OpeningsArePassableDoorsAreNot) {
+  const std::string yaml = std::string(kMinimal) +
+                           "    openings: [{at_m: 2.0, width_m: 1.0}]\n"
+                           "    doors: [{at_m: 5.5, width_m: 0.9, texture: paint}]\n";
+  const World w = parse_world(yaml, "mem.yaml", kWorlds);
+  EXPECT_FALSE(w.collision({2.0, 0.0}, 0.3, 0.0).has_value());  // in the opening at x = 2
+  EXPECT_TRUE(w.collision({4.0, 1.5}, 0.3, 0.0).has_value());   // the door at y = 1.5
+}
+
+TEST(World, MovingObstacleWalksBackAndForth) {
+  MovingObstacle m;
+  m.path_m = {{0, 0}, {2, 0}};
+  m.speed_m_s = 1.0;
+  EXPECT_NEAR(m.pose_at(0.5).x(), 0.5, 1e-12);
+  EXPECT_NEAR(m.pose_at(3.0).x(), 1.0, 1e-12);             // 3 m walked: 2 out, 1 back
+  EXPECT_NEAR(std::abs(m.pose_at(3.0).z()), M_PI, 1e-12);  // heading back
+  m.loop = true;
+  EXPECT_NEAR(m.pose_at(3.0).x(), 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace pepper::naoqi_bridge::mock
+
+namespace pepper::naoqi_bridge::mock {
+namespace {
+
+TEST(World, ReplayStartsArePerturbedWithinRangesDeterministically) {
+  const World w = load_world(kWorlds / "robotics_room.yaml");
+  const Scenario& s = w.scenario;
+  ASSERT_FALSE(s.replay_starts.empty());
+  const Pose2D exact = s.replay_start(1, 0);
+  EXPECT_EQ(exact.x_m, s.replay_starts[1].x_m);
+  EXPECT_EQ(exact.yaw_rad, s.replay_starts[1].yaw_rad);
+  bool moved = false;
+  for (size_t k = 0; k < 20; ++k) {
+    const Pose2D base = s.replay_starts[k % s.replay_starts.size()];
+    const Pose2D p = s.replay_start(k, 42);
+    const Pose2D again = s.replay_start(k, 42);
+    EXPECT_EQ(p.x_m, again.x_m);
+    EXPECT_EQ(p.y_m, again.y_m);
+    const double d = std::hypot(p.x_m - base.x_m, p.y_m - base.y_m);
+    EXPECT_LE(d, std::hypot(s.perturb_along_m, s.perturb_lateral_m) + 1e-12);
+    EXPECT_LE(std::abs(p.yaw_rad - base.yaw_rad), s.perturb_yaw_rad + 1e-12);
+    moved = moved || d > 0.01;
+    EXPECT_FALSE(w.collision({p.x_m, p.y_m}, 0.3, 0.0).has_value());
+  }
+  EXPECT_TRUE(moved);
+}
+
+}  // namespace
+}  // namespace pepper::naoqi_bridge::mock
