@@ -1,0 +1,108 @@
+#pragma once
+// MockNaoqiServer: a NAOqi stand-in that speaks the qi-messaging wire protocol on behalf of a
+// simulated robot (any mock::SimRobot), so tests and offline replays cross the real wire format.
+//
+// Serves service 0 (authenticate, optional user/password check), the ServiceDirectory (service
+// 1: service, services, machineId) and ALMotion, ALVideoDevice, ALRobotPosture, ALAutonomousLife,
+// ALBasicAwareness with NAOqi's method names, signatures and uids (PROTOCOL.md section 7), each
+// with its MetaObject. Backing: getImageRemote renders SimRobot::capture() at the subscribed
+// resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints.
+// When a connection that commanded the base drops, the server stops the base (stop_move), so a
+// lost client never leaves the simulated robot driving. Errors follow libqi's texts (3.2).
+//
+// tcp:// or tcps:// (TLS 1.2, certificate and key from files, or a self-signed EC certificate
+// generated at start-up). Port 0 picks an ephemeral port: read url() after start().
+//
+// Frames are served as fast as they are asked for (lockstep simulation) unless pace_frames.
+// Fault injection (MockServerOptions and the setters): reply latency, frame drops (the previous
+// image served again), stalled frames (getImageRemote never answered), disconnect after N
+// messages or on demand, malformed replies.
+//
+// Threading: one I/O thread of its own, started by start() and joined by stop()/destructor.
+// Every public method is thread-safe. The SimRobot must outlive the server.
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "naoqi_bridge/mock/sim_robot.hpp"
+#include "naoqi_bridge/qi/codec.hpp"
+
+namespace pepper::naoqi_bridge::qi {
+
+struct MockServerOptions {
+  std::string listen_url = "tcp://127.0.0.1:0";  ///< tcp:// or tcps://; port 0 = ephemeral
+  std::string tls_certificate_file;  ///< PEM; empty with tcps = self-signed generated at start
+  std::string tls_private_key_file;  ///< PEM
+  std::string user;                  ///< non-empty: require auth_user/auth_token to match
+  std::string password;
+  bool legacy_service_info = false;  ///< answer 6-field ServiceInfo (NAOqi 2.5) instead of 7
+  std::chrono::milliseconds reply_latency{0};  ///< added before every reply
+  int drop_every_nth_frame = 0;  ///< 0 off; else every nth getImageRemote repeats the last image
+  int disconnect_after_messages = 0;  ///< 0 off; else close each connection after n received
+  int malformed_reply_every_nth = 0;  ///< 0 off; else every nth non-void reply is corrupted
+  bool stop_base_on_disconnect = true;
+  /// Serve each subscriber at most at its subscribed fps, like a real camera (wall-clock paced).
+  /// Off (default): every getImageRemote renders a new frame at once (lockstep, faster than real
+  /// time, for tests and offline replay).
+  bool pace_frames = false;
+  /// Send a Capability message (type 6) as soon as a client connects, before authentication,
+  /// as libqi 2.5 servers may (PROTOCOL.md 3.2); clients must merge it.
+  bool announce_capabilities = false;
+  /// Answer method calls with the DynamicPayload flag (payload = one `m`), which clients must
+  /// accept (PROTOCOL.md 1.3).
+  bool dynamic_replies = false;
+  CodecLimits limits;
+
+  std::vector<std::string> validate() const;
+};
+
+class MockNaoqiServer {
+ public:
+  MockNaoqiServer(mock::SimRobot& robot, MockServerOptions options = {});
+  ~MockNaoqiServer();
+  MockNaoqiServer(const MockNaoqiServer&) = delete;
+  MockNaoqiServer& operator=(const MockNaoqiServer&) = delete;
+
+  /// Binds and starts serving. Throws BridgeError (bad options, port in use, bad certificate).
+  void start();
+  /// Closes every connection and joins the I/O thread. Idempotent, never throws.
+  void stop() noexcept;
+
+  /// The URL clients should use, with the bound port (e.g. "tcp://127.0.0.1:40123").
+  std::string url() const;
+  std::uint16_t port() const;
+  /// SHA-256 fingerprint of the served certificate (tcps), "" on tcp.
+  std::string certificate_sha256() const;
+
+  /// Fault injection at run time.
+  void disconnect_all();
+  void set_stall_frames(bool stall);
+  void set_reply_latency(std::chrono::milliseconds latency);
+
+  /// State of the simulated services (for tests).
+  std::string autonomous_life_state() const;
+  bool basic_awareness_enabled() const;
+  bool external_collision_protection() const;
+  double stiffness(const std::string& joint) const;  ///< 0 when never set
+  std::vector<std::string> video_subscribers() const;
+
+  struct Stats {
+    std::uint64_t connections_accepted = 0;
+    std::uint64_t connections_open = 0;
+    std::uint64_t messages_received = 0;
+    std::uint64_t frames_served = 0;
+    std::uint64_t auth_failures = 0;
+    std::uint64_t protocol_errors = 0;
+    std::uint64_t base_stops_on_disconnect = 0;
+  };
+  Stats stats() const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<Impl> impl_;
+};
+
+}  // namespace pepper::naoqi_bridge::qi

@@ -1,0 +1,149 @@
+#pragma once
+// QiBridge: RobotBridge for a real Pepper (or our mock NAOqi server) over qi messaging.
+//
+// Services: ALVideoDevice (subscribeCamera on the top camera in grey kYuv, getImageRemote,
+// unsubscribe), ALMotion (wakeUp, setStiffnesses, setAngles/getAngles for HeadYaw, HeadPitch,
+// HipRoll, HipPitch, KneePitch, move(fff), stopMove; external collision protection is left as
+// the robot has it), ALAutonomousLife and ALBasicAwareness (turned off by lock_head() so the
+// head stays still; the previous states come back with release()). Methods are resolved by name
+// and parameter signature through each service's MetaObject, never by hard-coded uid.
+//
+// Frames: one getImageRemote request is always kept in flight while the caller processes the
+// previous frame (hides WiFi latency); frames carry the robot's timestamp (s, us -> t_ns); a
+// reply with a timestamp not newer than the last one (the robot had no new image) is skipped.
+//
+// Safety (docs/naoqi_bridge.md): a watchdog thread stops the base (move(0,0,0) then stopMove)
+// when no fresh move() arrives within `watchdog_timeout` while moving, when frames stall while
+// moving, and any exception in a bridge call stops the base before it propagates. A lost
+// connection latches "needs operator": move() then refuses (BridgeError) until the operator
+// calls clear_fault() (after reconnect()); the robot side stops its base on disconnect (our mock
+// server does; a real NAOqi keeps the last velocity, which is why the watchdog exists).
+// stop() is callable from any thread at any time and never throws.
+//
+// Threading: as RobotBridge. One watchdog thread, started by connect() and joined by the
+// destructor. The password is never logged; describe() shows URL and user only.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "naoqi_bridge/qi/session.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+
+namespace pepper::naoqi_bridge::qi {
+
+struct QiBridgeOptions {
+  std::string url = "tcp://127.0.0.1:9559";  ///< tcp://HOST:9559 or tcps://HOST:9503
+  std::string user;                          ///< e.g. "nao" for NAOqi 2.9; empty: no login
+  std::string password;                      ///< from a prompt, file or env; never logged
+  std::string tls_pin_sha256;                ///< empty: accept the robot's self-signed cert
+  std::chrono::milliseconds connect_timeout{5000};
+  std::chrono::milliseconds call_timeout{3000};         ///< per remote call
+  std::chrono::milliseconds stop_call_timeout{500};     ///< per call inside stop()
+  std::chrono::milliseconds watchdog_timeout{300};      ///< stop if no move() for this long
+  std::chrono::milliseconds frame_stall_timeout{1000};  ///< stop if moving and no frame this long
+  std::chrono::milliseconds watchdog_period{20};        ///< watchdog check period
+  int reconnect_attempts = 5;                           ///< reconnect(): tries before giving up
+  std::chrono::milliseconds reconnect_initial_backoff{250};  ///< doubles after each failure
+  std::chrono::milliseconds reconnect_max_backoff{4000};
+  std::string subscriber_name = "pepper_nav";  ///< ALVideoDevice subscriber prefix (ours)
+  bool disable_autonomous_life = true;   ///< lock_head(): ALAutonomousLife "disabled" + wakeUp
+  bool disable_basic_awareness = true;   ///< lock_head(): ALBasicAwareness.setEnabled(false)
+  double head_max_speed_fraction = 0.2;  ///< setAngles fractionMaxSpeed, (0, 1]
+  std::chrono::milliseconds head_settle_timeout{2000};  ///< lock_head(): wait for read-back
+  std::chrono::milliseconds head_resend_period{1000};   ///< re-send head angles; 0 = off
+  CodecLimits limits;
+
+  /// Messages naming each invalid field and its allowed range; empty when valid.
+  std::vector<std::string> validate() const;
+};
+
+class QiBridge : public RobotBridge {
+ public:
+  explicit QiBridge(QiBridgeOptions options);
+  ~QiBridge() override;
+
+  void connect() override;
+  core::CameraIntrinsics start_camera(const CameraRequest& request) override;
+  std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override;
+  HeadLockStatus lock_head(const HeadLockRequest& request) override;
+  void move(const BaseVelocity& velocity) override;
+  void stop() noexcept override;
+  void release() noexcept override;
+  ConnectionState state() const override;
+  std::string describe() const override;
+
+  /// Operator action after a fault: re-arms move(). Throws BridgeError when not connected.
+  void clear_fault();
+  /// True after a disconnect or protocol violation until clear_fault().
+  bool needs_operator() const;
+  std::string fault_reason() const;
+  /// Operator action: reconnect with bounded exponential backoff, re-subscribe the camera and
+  /// re-lock the head if they were active. The fault stays latched (clear_fault() re-arms).
+  void reconnect();
+
+  /// SHA-256 of the robot's TLS certificate (tcps), "" on tcp.
+  std::string tls_fingerprint() const;
+  QiSession& session() { return *session_; }
+
+  struct Counters {
+    std::uint64_t frames = 0;          ///< frames returned by next_frame
+    std::uint64_t stale_replies = 0;   ///< replies with no newer image
+    std::uint64_t moves = 0;           ///< move commands sent
+    std::uint64_t stops = 0;           ///< stop sequences sent
+    std::uint64_t watchdog_stops = 0;  ///< of which triggered by the watchdog
+  };
+  Counters counters() const;
+  /// Why the last automatic stop happened ("watchdog: ...", "frames stalled ..."), for logs.
+  std::string last_stop_reason() const;
+
+ private:
+  void open_session();
+  void subscribe_camera_locked();
+  PendingCall request_image();
+  void latch_fault(const std::string& why);
+  void stop_base(const std::string& why) noexcept;
+  void watchdog_loop();
+  bool connected() const { return state_.load() == ConnectionState::kConnected; }
+
+  QiBridgeOptions options_;
+  std::unique_ptr<QiSession> session_;
+  std::atomic<ConnectionState> state_{ConnectionState::kDisconnected};
+
+  mutable std::mutex mutex_;  // services, camera and head state, fault, counters
+  std::optional<ServiceHandle> motion_, video_, life_, awareness_;
+  std::optional<CameraRequest> camera_;
+  int resolution_code_ = 2;
+  std::string camera_handle_;
+  PendingCall inflight_;
+  std::chrono::steady_clock::time_point inflight_since_{};
+  std::int64_t last_t_ns_ = -1;
+  std::int64_t frame_index_ = 0;
+  std::optional<HeadLockRequest> head_;
+  std::optional<std::string> previous_life_state_;
+  std::optional<bool> previous_awareness_;
+  bool needs_operator_ = false;
+  std::string fault_reason_;
+  std::string last_stop_reason_;
+  Counters counters_;
+
+  std::mutex motion_send_mutex_;  // orders move/stop sends on the wire
+  std::atomic<bool> moving_{false};
+  std::atomic<std::int64_t> last_move_ns_{0};
+  std::atomic<std::int64_t> last_frame_ns_{0};
+  std::atomic<std::int64_t> last_head_resend_ns_{0};
+
+  std::mutex wd_mutex_;
+  std::condition_variable wd_cv_;
+  bool wd_quit_ = false;
+  std::thread watchdog_;
+};
+
+}  // namespace pepper::naoqi_bridge::qi

@@ -1,0 +1,1080 @@
+// MockNaoqiServer: qi-messaging server for a simulated Pepper (see the header).
+#include "naoqi_bridge/qi/mock_server.hpp"
+
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "connection.hpp"
+#include "naoqi_bridge/qi/image_remote.hpp"
+#include "naoqi_bridge/qi/message.hpp"
+#include "naoqi_bridge/qi/meta.hpp"
+#include "naoqi_bridge/qi/url.hpp"
+
+namespace pepper::naoqi_bridge::qi {
+
+namespace asio = boost::asio;
+using tcp = asio::ip::tcp;
+
+std::vector<std::string> MockServerOptions::validate() const {
+  std::vector<std::string> errors;
+  try {
+    (void)parse_url(listen_url);
+  } catch (const BridgeError& e) {
+    errors.push_back(std::string("listen_url: ") + e.what());
+  }
+  if (tls_certificate_file.empty() != tls_private_key_file.empty()) {
+    errors.push_back("tls_certificate_file and tls_private_key_file must be given together");
+  }
+  if (user.empty() && !password.empty()) errors.push_back("password given without a user");
+  if (reply_latency.count() < 0 || reply_latency.count() > 60000) {
+    errors.push_back("reply_latency must be in 0..60000 ms, got " +
+                     std::to_string(reply_latency.count()));
+  }
+  if (drop_every_nth_frame < 0 || drop_every_nth_frame == 1) {
+    errors.push_back("drop_every_nth_frame must be 0 (off) or >= 2, got " +
+                     std::to_string(drop_every_nth_frame));
+  }
+  if (disconnect_after_messages < 0) errors.push_back("disconnect_after_messages must be >= 0");
+  if (malformed_reply_every_nth < 0) errors.push_back("malformed_reply_every_nth must be >= 0");
+  for (const auto& e : limits.validate()) errors.push_back("limits." + e);
+  return errors;
+}
+
+namespace {
+
+/// Error raised by a simulated method: becomes an Error reply with this exact text.
+struct MethodFailure : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct ConnState;
+using Handler = std::function<Value(ConnState&, const std::vector<Value>&)>;
+
+struct MethodDef {
+  MetaMethod meta;
+  Type params;
+  Type ret;
+  Handler fn;
+};
+
+struct ServiceDef {
+  std::string name;
+  std::uint32_t id = 0;
+  std::map<std::uint32_t, MethodDef> methods;
+  std::map<std::uint32_t, MetaSignal> signals;
+
+  void add(std::uint32_t uid, const std::string& name_, const std::string& params,
+           const std::string& ret, Handler fn, std::vector<std::string> param_names = {}) {
+    MethodDef d;
+    d.meta.uid = uid;
+    d.meta.name = name_;
+    d.meta.parameters_signature = params;
+    d.meta.return_signature = ret;
+    for (auto& p : param_names) d.meta.parameters.push_back({p, ""});
+    d.params = parse_signature(params);
+    d.ret = parse_signature(ret);
+    d.fn = std::move(fn);
+    methods[uid] = std::move(d);
+  }
+  MetaObject meta() const {
+    MetaObject mo;
+    for (const auto& [uid, m] : methods) mo.methods[uid] = m.meta;
+    mo.signals = signals;
+    mo.description = name;
+    return mo;
+  }
+};
+
+struct ConnState {
+  std::shared_ptr<detail::MessageConnection> conn;
+  bool authenticated = false;
+  bool commanded_base = false;
+  std::uint64_t received = 0;
+};
+
+std::vector<std::string> names_arg(const Value& v, const char* what) {
+  const Value& u = v.unwrapped();
+  if (u.kind() == TypeKind::kString) return {u.as_string()};
+  std::vector<std::string> out;
+  try {
+    for (const auto& e : u.elements()) out.push_back(e.unwrapped().as_string());
+  } catch (const ProtocolError&) {
+    throw MethodFailure(std::string(what) + ": expected a name or a list of names, got '" +
+                        u.signature() + "'");
+  }
+  return out;
+}
+
+std::vector<double> floats_arg(const Value& v, std::size_t n, const char* what) {
+  const Value& u = v.unwrapped();
+  std::vector<double> out;
+  try {
+    if (is_numeric(u.kind())) {
+      out.assign(n, u.as_double());
+    } else {
+      for (const auto& e : u.elements()) out.push_back(e.unwrapped().as_double());
+    }
+  } catch (const ProtocolError&) {
+    throw MethodFailure(std::string(what) + ": expected a number or a list of numbers, got '" +
+                        u.signature() + "'");
+  }
+  if (out.size() != n) {
+    throw MethodFailure(std::string(what) + ": " + std::to_string(n) + " names but " +
+                        std::to_string(out.size()) + " values");
+  }
+  return out;
+}
+
+std::vector<std::string> expand_joint_group(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  for (const auto& n : names) {
+    if (n == "Head") {
+      out.insert(out.end(), {"HeadYaw", "HeadPitch"});
+    } else if (n == "Leg") {
+      out.insert(out.end(), {"HipRoll", "HipPitch", "KneePitch"});
+    } else if (n == "Body" || n == "JointActuators" || n == "Joints") {
+      out.insert(out.end(), {"HeadYaw", "HeadPitch", "HipRoll", "HipPitch", "KneePitch"});
+    } else {
+      out.push_back(n);
+    }
+  }
+  return out;
+}
+
+struct Subscription {
+  int camera = 0;
+  int resolution = 2;
+  int color_space = 0;
+  int fps = 30;
+  std::chrono::steady_clock::time_point next_frame{};  ///< pace_frames: earliest next capture
+};
+
+std::pair<int, int> resolution_size(int code) {
+  switch (code) {
+    case 8:
+      return {40, 30};
+    case 7:
+      return {80, 60};
+    case 0:
+      return {160, 120};
+    case 1:
+      return {320, 240};
+    case 2:
+      return {640, 480};
+    case 3:
+      return {1280, 960};
+    default:
+      throw MethodFailure("ALVideoDevice: unsupported resolution " + std::to_string(code));
+  }
+}
+
+int layers_for(int color_space) {
+  switch (color_space) {
+    case 0:
+      return 1;
+    case 9:
+      return 2;
+    case 10:
+    case 11:
+    case 12:
+    case 13:
+      return 3;
+    default:
+      throw MethodFailure("ALVideoDevice: unsupported color space " + std::to_string(color_space));
+  }
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw BridgeError("cannot read '" + path + "'");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Impl> {
+  mock::SimRobot& robot;
+  MockServerOptions options;
+  asio::io_context io;
+  std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
+  std::thread thread;
+  std::unique_ptr<asio::ssl::context> ssl_ctx;
+  std::unique_ptr<tcp::acceptor> acceptor;
+  Url url;
+  std::string fingerprint;
+  bool running = false;
+
+  // Everything below is touched on the I/O thread, plus the mutex for test accessors.
+  mutable std::mutex mutex;
+  std::map<std::uint32_t, ServiceDef> services;  // by id
+  std::map<std::string, std::uint32_t> service_ids;
+  std::set<std::shared_ptr<ConnState>> conns;
+  std::map<std::string, Subscription> subscriptions;
+  std::map<std::string, double> stiffness;
+  std::string life_state = "solitary";
+  bool awareness_enabled = true;
+  bool awareness_paused = false;
+  bool collision_protection = true;
+  bool awake = false;
+  std::string posture = "Stand";
+  BaseVelocity last_velocity;
+  std::chrono::milliseconds latency{0};
+  bool stall_frames = false;
+  std::uint64_t image_requests = 0;
+  std::uint64_t replies = 0;
+  std::map<std::string, ImageRemote> last_image;  // per handle, for frame drops
+  Stats stats;
+
+  Impl(mock::SimRobot& r, MockServerOptions o) : robot(r), options(std::move(o)) {
+    latency = options.reply_latency;
+    build_services();
+  }
+
+  // -------------------------------------------------------------------------------------------
+  // Service tables (PROTOCOL.md 2, 4, 7)
+
+  void add_generic(ServiceDef& s) {
+    s.add(0, "registerEvent", "(IIL)", "L",
+          [](ConnState&, const std::vector<Value>& a) {
+            return Value::uint64((static_cast<std::uint64_t>(a[1].as_uint()) << 32) | 1u);
+          },
+          {"objectId", "signalId", "linkId"});
+    s.add(1, "unregisterEvent", "(IIL)", "v",
+          [](ConnState&, const std::vector<Value>&) { return Value(); });
+    const std::uint32_t id = s.id;
+    s.add(2, "metaObject", "(I)", MetaObject::signature(),
+          [this, id](ConnState&, const std::vector<Value>&) {
+            std::lock_guard lock(mutex);
+            return services.at(id).meta().to_value();
+          },
+          {"objectId"});
+    s.add(3, "terminate", "(I)", "v",
+          [](ConnState&, const std::vector<Value>&) { return Value(); });
+    s.add(5, "property", "(m)", "m", [](ConnState&, const std::vector<Value>& a) -> Value {
+      throw MethodFailure("property: no such property " + a[0].to_debug_string());
+    });
+    s.add(6, "setProperty", "(mm)", "v", [](ConnState&, const std::vector<Value>& a) -> Value {
+      throw MethodFailure("setProperty: no such property " + a[0].to_debug_string());
+    });
+    s.add(7, "properties", "()", "[s]",
+          [](ConnState&, const std::vector<Value>&) { return Value::strings({}); });
+    s.add(8, "registerEventWithSignature", "(IILs)", "L",
+          [](ConnState&, const std::vector<Value>& a) {
+            return Value::uint64((static_cast<std::uint64_t>(a[1].as_uint()) << 32) | 1u);
+          });
+  }
+
+  ServiceDef& new_service(const std::string& name, std::uint32_t id) {
+    ServiceDef& s = services[id];
+    s.name = name;
+    s.id = id;
+    service_ids[name] = id;
+    add_generic(s);
+    return s;
+  }
+
+  ServiceInfo info_of(const ServiceDef& s) const {
+    ServiceInfo info;
+    info.name = s.name;
+    info.service_id = s.id;
+    info.machine_id = "5e1f0a7c-mock-pepper";
+    info.process_id = 4242;
+    info.endpoints = {url.to_string()};
+    info.session_id = "a1b2c3d4-mock-session";
+    if (!options.legacy_service_info) info.object_uid = std::string(20, '\x07');
+    return info;
+  }
+
+  void build_services() {
+    using A = const std::vector<Value>&;
+    ServiceDef& dir = new_service("ServiceDirectory", 1);
+    const std::string info_sig =
+        options.legacy_service_info ? ServiceInfo::signature_v6() : ServiceInfo::signature_v7();
+    dir.add(100, "service", "(s)", info_sig,
+            [this](ConnState&, A a) {
+              std::lock_guard lock(mutex);
+              auto it = service_ids.find(a[0].as_string());
+              if (it == service_ids.end()) {
+                throw MethodFailure("Cannot find service '" + a[0].as_string() + "' in index");
+              }
+              return info_of(services.at(it->second)).to_value();
+            },
+            {"name"});
+    dir.add(101, "services", "()", "[" + info_sig + "]", [this, info_sig](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      std::vector<Value> all;
+      for (const auto& [id, s] : services) all.push_back(info_of(s).to_value());
+      if (all.empty()) return Value::list(parse_signature(info_sig), {});
+      const Type t = all.front().type();
+      return Value::list(t, std::move(all));
+    });
+    dir.add(108, "machineId", "()", "s",
+            [](ConnState&, A) { return Value::string("5e1f0a7c-mock-pepper"); });
+    dir.signals[106] = {106, "serviceAdded", "(Is)"};
+    dir.signals[107] = {107, "serviceRemoved", "(Is)"};
+
+    // ALMotion (7.1)
+    ServiceDef& motion = new_service("ALMotion", 2);
+    motion.add(113, "wakeUp", "()", "v", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      awake = true;
+      return Value();
+    });
+    motion.add(114, "rest", "()", "v", [this](ConnState&, A) {
+      robot.stop_move();
+      std::lock_guard lock(mutex);
+      awake = false;
+      return Value();
+    });
+    motion.add(122, "robotIsWakeUp", "()", "b", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::boolean(awake);
+    });
+    motion.add(124, "setStiffnesses", "(mm)", "v",
+               [this](ConnState&, A a) {
+                 const auto names = expand_joint_group(names_arg(a[0], "ALMotion::setStiffnesses"));
+                 const Value& u = a[1].unwrapped();
+                 std::vector<double> values =
+                     is_numeric(u.kind()) ? std::vector<double>(names.size(), u.as_double())
+                                          : floats_arg(a[1], u.elements().size(), "setStiffnesses");
+                 if (values.size() != names.size()) {
+                   // A list given for a group name: libqi broadcasts per joint only when sizes
+                   // agree.
+                   throw MethodFailure("ALMotion::setStiffnesses: " + std::to_string(names.size()) +
+                                       " joints but " + std::to_string(values.size()) + " values");
+                 }
+                 std::lock_guard lock(mutex);
+                 for (std::size_t i = 0; i < names.size(); ++i) stiffness[names[i]] = values[i];
+                 return Value();
+               },
+               {"names", "stiffnesses"});
+    motion.add(126, "getStiffnesses", "(m)", "[f]",
+               [this](ConnState&, A a) {
+                 const auto names = expand_joint_group(names_arg(a[0], "ALMotion::getStiffnesses"));
+                 std::lock_guard lock(mutex);
+                 std::vector<float> out;
+                 for (const auto& n : names) out.push_back(static_cast<float>(stiffness[n]));
+                 return Value::floats(out);
+               },
+               {"names"});
+    motion.add(130, "setAngles", "(mmf)", "v",
+               [this](ConnState&, A a) {
+                 const auto names = expand_joint_group(names_arg(a[0], "ALMotion::setAngles"));
+                 const auto angles = floats_arg(a[1], names.size(), "ALMotion::setAngles");
+                 try {
+                   robot.set_joint_angles(names, angles);
+                 } catch (const BridgeError& e) {
+                   throw MethodFailure(std::string("ALMotion::setAngles: ") + e.what());
+                 }
+                 return Value();
+               },
+               {"names", "angles", "fractionMaxSpeed"});
+    motion.add(132, "getAngles", "(mb)", "[f]",
+               [this](ConnState&, A a) {
+                 const auto names = expand_joint_group(names_arg(a[0], "ALMotion::getAngles"));
+                 std::vector<double> angles;
+                 try {
+                   angles = robot.joint_angles(names);
+                 } catch (const BridgeError& e) {
+                   throw MethodFailure(std::string("ALMotion::getAngles: ") + e.what());
+                 }
+                 std::vector<float> out(angles.begin(), angles.end());
+                 return Value::floats(out);
+               },
+               {"names", "useSensors"});
+    auto do_move = [this](ConnState& c, double x, double y, double theta) {
+      c.commanded_base = true;
+      BaseVelocity v{x, y, theta};
+      robot.command_velocity(v);
+      std::lock_guard lock(mutex);
+      last_velocity = v;
+      return Value();
+    };
+    motion.add(135, "move", "(fff)", "v",
+               [do_move](ConnState& c, A a) {
+                 return do_move(c, a[0].as_double(), a[1].as_double(), a[2].as_double());
+               },
+               {"x", "y", "theta"});
+    motion.add(136, "move", "(fffm)", "v",
+               [do_move](ConnState& c, A a) {
+                 return do_move(c, a[0].as_double(), a[1].as_double(), a[2].as_double());
+               },
+               {"x", "y", "theta", "moveConfig"});
+    motion.add(137, "moveToward", "(fff)", "v",
+               [do_move](ConnState& c, A a) {
+                 return do_move(c, 0.35 * a[0].as_double(), 0.35 * a[1].as_double(),
+                                1.0 * a[2].as_double());
+               },
+               {"x", "y", "theta"});
+    motion.add(177, "stopMove", "()", "v", [this](ConnState&, A) {
+      robot.stop_move();
+      std::lock_guard lock(mutex);
+      last_velocity = {};
+      return Value();
+    });
+    motion.add(183, "getRobotVelocity", "()", "[f]", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::floats({static_cast<float>(last_velocity.v_x_m_s),
+                            static_cast<float>(last_velocity.v_y_m_s),
+                            static_cast<float>(last_velocity.omega_rad_s)});
+    });
+    motion.add(229, "setExternalCollisionProtectionEnabled", "(sb)", "v",
+               [this](ConnState&, A a) {
+                 std::lock_guard lock(mutex);
+                 if (a[0].as_string() == "All" || a[0].as_string() == "Move")
+                   collision_protection = a[1].as_bool();
+                 return Value();
+               },
+               {"name", "enable"});
+    motion.add(232, "getExternalCollisionProtectionEnabled", "(s)", "b",
+               [this](ConnState&, A) {
+                 std::lock_guard lock(mutex);
+                 return Value::boolean(collision_protection);
+               },
+               {"name"});
+
+    // ALVideoDevice (7.2)
+    ServiceDef& video = new_service("ALVideoDevice", 3);
+    auto subscribe = [this](const std::string& name, int cam, int res, int cs, int fps) {
+      (void)resolution_size(res);
+      (void)layers_for(cs);
+      std::lock_guard lock(mutex);
+      for (int n = 0; n < 6; ++n) {
+        const std::string handle = name + "_" + std::to_string(n);
+        if (!subscriptions.count(handle)) {
+          Subscription sub;
+          sub.camera = cam;
+          sub.resolution = res;
+          sub.color_space = cs;
+          sub.fps = fps;
+          subscriptions[handle] = sub;
+          return Value::string(handle);
+        }
+      }
+      throw MethodFailure("ALVideoDevice::subscribeCamera: too many instances of '" + name +
+                          "' (6); unsubscribe the old ones");
+    };
+    video.add(113, "subscribeCamera", "(siiii)", "s",
+              [subscribe](ConnState&, A a) {
+                return subscribe(a[0].as_string(), static_cast<int>(a[1].as_int()),
+                                 static_cast<int>(a[2].as_int()), static_cast<int>(a[3].as_int()),
+                                 static_cast<int>(a[4].as_int()));
+              },
+              {"name", "cameraIndex", "resolution", "colorSpace", "fps"});
+    video.add(191, "subscribe", "(siii)", "s",
+              [subscribe](ConnState&, A a) {
+                return subscribe(a[0].as_string(), 0, static_cast<int>(a[1].as_int()),
+                                 static_cast<int>(a[2].as_int()), static_cast<int>(a[3].as_int()));
+              },
+              {"name", "resolution", "colorSpace", "fps"});
+    video.add(115, "unsubscribe", "(s)", "b",
+              [this](ConnState&, A a) {
+                std::lock_guard lock(mutex);
+                last_image.erase(a[0].as_string());
+                return Value::boolean(subscriptions.erase(a[0].as_string()) > 0);
+              },
+              {"nameId"});
+    video.add(119, "setActiveCamera", "(i)", "b",
+              [](ConnState&, A) { return Value::boolean(true); });
+    video.add(149, "setResolution", "(si)", "b", [this](ConnState&, A a) {
+      (void)resolution_size(static_cast<int>(a[1].as_int()));
+      std::lock_guard lock(mutex);
+      auto it = subscriptions.find(a[0].as_string());
+      if (it == subscriptions.end()) return Value::boolean(false);
+      it->second.resolution = static_cast<int>(a[1].as_int());
+      return Value::boolean(true);
+    });
+    video.add(151, "setColorSpace", "(si)", "b", [this](ConnState&, A a) {
+      (void)layers_for(static_cast<int>(a[1].as_int()));
+      std::lock_guard lock(mutex);
+      auto it = subscriptions.find(a[0].as_string());
+      if (it == subscriptions.end()) return Value::boolean(false);
+      it->second.color_space = static_cast<int>(a[1].as_int());
+      return Value::boolean(true);
+    });
+    // getImageRemote (162) is answered by serve_image() (encoded directly, no Value tree).
+    video.add(162, "getImageRemote", "(s)", "m",
+              [](ConnState&, A) -> Value { throw MethodFailure("unreachable"); }, {"name"});
+    video.add(163, "releaseImage", "(s)", "b", [](ConnState&, A) { return Value::boolean(true); });
+
+    // ALRobotPosture (7.3)
+    ServiceDef& posture_svc = new_service("ALRobotPosture", 4);
+    auto go = [this](ConnState&, A a) {
+      const std::string p = a[0].as_string();
+      if (p != "Stand" && p != "StandInit" && p != "StandZero" && p != "Crouch") {
+        return Value::boolean(false);
+      }
+      std::lock_guard lock(mutex);
+      posture = p;
+      return Value::boolean(true);
+    };
+    posture_svc.add(114, "goToPosture", "(sf)", "b", go, {"postureName", "maxSpeedFraction"});
+    posture_svc.add(115, "applyPosture", "(sf)", "b", go, {"postureName", "maxSpeedFraction"});
+    posture_svc.add(116, "stopMove", "()", "v", [](ConnState&, A) { return Value(); });
+    posture_svc.add(120, "getPosture", "()", "s", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::string(posture);
+    });
+
+    // ALAutonomousLife
+    ServiceDef& life = new_service("ALAutonomousLife", 5);
+    life.add(126, "setState", "(s)", "v",
+             [this](ConnState&, A a) {
+               const std::string s = a[0].as_string();
+               if (s != "solitary" && s != "interactive" && s != "disabled" && s != "safeguard") {
+                 throw MethodFailure("ALAutonomousLife::setState: invalid state '" + s + "'");
+               }
+               std::lock_guard lock(mutex);
+               life_state = s;
+               return Value();
+             },
+             {"state"});
+    life.add(127, "getState", "()", "s", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::string(life_state);
+    });
+
+    // ALBasicAwareness
+    ServiceDef& aware = new_service("ALBasicAwareness", 6);
+    aware.add(126, "setEnabled", "(b)", "v",
+              [this](ConnState&, A a) {
+                std::lock_guard lock(mutex);
+                awareness_enabled = a[0].as_bool();
+                return Value();
+              },
+              {"enabled"});
+    aware.add(127, "isEnabled", "()", "b", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::boolean(awareness_enabled);
+    });
+    aware.add(132, "pauseAwareness", "()", "v", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      awareness_paused = true;
+      return Value();
+    });
+    aware.add(133, "resumeAwareness", "()", "v", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      awareness_paused = false;
+      return Value();
+    });
+    aware.add(134, "isAwarenessPaused", "()", "b", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::boolean(awareness_paused);
+    });
+    aware.add(140, "setEngagementMode", "(s)", "v", [](ConnState&, A) { return Value(); });
+    aware.add(143, "setTrackingMode", "(s)", "v", [](ConnState&, A) { return Value(); });
+  }
+
+  // -------------------------------------------------------------------------------------------
+  // Networking
+
+  void start() {
+    const auto errors = options.validate();
+    if (!errors.empty()) throw BridgeError("MockServerOptions: " + errors.front());
+    url = parse_url(options.listen_url);
+    if (url.tls) {
+      ssl_ctx = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
+      ssl_ctx->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                           asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                           asio::ssl::context::no_tlsv1_1);
+      // libqi servers speak TLS 1.2 only (PROTOCOL.md 9): do the same.
+      SSL_CTX_set_max_proto_version(ssl_ctx->native_handle(), TLS1_2_VERSION);
+      std::string cert_pem;
+      std::string key_pem;
+      if (options.tls_certificate_file.empty()) {
+        auto ss = detail::make_self_signed_certificate("mock-pepper");
+        cert_pem = std::move(ss.certificate_pem);
+        key_pem = std::move(ss.private_key_pem);
+      } else {
+        cert_pem = read_file(options.tls_certificate_file);
+        key_pem = read_file(options.tls_private_key_file);
+      }
+      try {
+        ssl_ctx->use_certificate_chain(asio::buffer(cert_pem));
+        ssl_ctx->use_private_key(asio::buffer(key_pem), asio::ssl::context::pem);
+      } catch (const std::exception& e) {
+        throw BridgeError(std::string("mock server: bad TLS certificate or key: ") + e.what());
+      }
+      fingerprint = detail::certificate_sha256_pem(cert_pem);
+    }
+    try {
+      tcp::resolver resolver(io);
+      auto results = resolver.resolve(url.host, std::to_string(url.port));
+      const tcp::endpoint ep = *results.begin();
+      acceptor = std::make_unique<tcp::acceptor>(io);
+      acceptor->open(ep.protocol());
+      acceptor->set_option(tcp::acceptor::reuse_address(true));
+      acceptor->bind(ep);
+      acceptor->listen();
+      url.port = acceptor->local_endpoint().port();
+    } catch (const boost::system::system_error& e) {
+      throw BridgeError("mock server: cannot listen on " + options.listen_url + ": " + e.what());
+    }
+    work.emplace(asio::make_work_guard(io));
+    accept_next();
+    thread = std::thread([this] { io.run(); });
+    running = true;
+  }
+
+  void stop() {
+    if (!running) return;
+    running = false;
+    // Raw `this` in the I/O handlers is safe: the thread is joined here, before Impl dies.
+    asio::post(io, [this] {
+      boost::system::error_code ignored;
+      if (acceptor) acceptor->close(ignored);
+      std::set<std::shared_ptr<ConnState>> all;
+      {
+        std::lock_guard lock(mutex);
+        all = conns;
+      }
+      for (const auto& c : all) c->conn->close("server stopping");
+      work.reset();  // run() returns once the closes have completed
+    });
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    while (!io.stopped() && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    io.stop();
+    if (thread.joinable()) thread.join();
+  }
+
+  void accept_next() {
+    auto conn = std::make_shared<detail::MessageConnection>(io, ssl_ctx.get(), options.limits);
+    acceptor->async_accept(conn->socket(), [this, conn](const boost::system::error_code& ec) {
+      Impl* const self = this;
+      if (ec) {
+        if (ec != asio::error::operation_aborted && self->acceptor->is_open()) self->accept_next();
+        return;
+      }
+      boost::system::error_code ignored;
+      conn->socket().set_option(tcp::no_delay(true), ignored);
+      if (conn->tls()) {
+        conn->tls()->async_handshake(asio::ssl::stream_base::server,
+                                     [self, conn](const boost::system::error_code& ec2) {
+                                       if (ec2) {
+                                         boost::system::error_code ig;
+                                         conn->socket().close(ig);
+                                         return;
+                                       }
+                                       self->begin(conn);
+                                     });
+      } else {
+        self->begin(conn);
+      }
+      self->accept_next();
+    });
+  }
+
+  void begin(const std::shared_ptr<detail::MessageConnection>& conn) {
+    auto state = std::make_shared<ConnState>();
+    state->conn = conn;
+    {
+      std::lock_guard lock(mutex);
+      conns.insert(state);
+      ++stats.connections_accepted;
+      stats.connections_open = conns.size();
+    }
+    std::weak_ptr<Impl> weak = shared_from_this();
+    std::weak_ptr<ConnState> wstate = state;
+    if (options.announce_capabilities) {
+      CapabilityMap caps;
+      caps["MessageFlags"] = Value::boolean(true);
+      caps["MockAnnounced"] = Value::boolean(true);
+      MessageHeader h;
+      h.id = 1;
+      h.type = MessageType::kCapability;
+      conn->send(h, encode_capabilities(caps));
+    }
+    conn->start(
+        [weak, wstate](Message m) {
+          auto self = weak.lock();
+          auto st = wstate.lock();
+          if (self && st) self->on_message(*st, std::move(m));
+        },
+        [weak, state](const std::string&) {
+          if (auto self = weak.lock()) self->on_close(state);
+        });
+  }
+
+  void on_close(const std::shared_ptr<ConnState>& state) {
+    const bool stop_base = options.stop_base_on_disconnect && state->commanded_base;
+    {
+      std::lock_guard lock(mutex);
+      conns.erase(state);
+      stats.connections_open = conns.size();
+      if (stop_base) ++stats.base_stops_on_disconnect;
+    }
+    if (stop_base) robot.stop_move();  // a lost client must not leave the base driving
+  }
+
+  void send_reply(ConnState& c, MessageHeader h, std::vector<std::uint8_t> payload,
+                  bool allow_corrupt = true) {
+    bool corrupt = false;
+    std::chrono::milliseconds delay{0};
+    {
+      std::lock_guard lock(mutex);
+      if (h.type == MessageType::kReply && allow_corrupt && !payload.empty()) {
+        ++replies;
+        corrupt = options.malformed_reply_every_nth > 0 &&
+                  replies % static_cast<std::uint64_t>(options.malformed_reply_every_nth) == 0;
+      }
+      delay = latency;
+    }
+    if (corrupt) {
+      // A dynamic list claiming 0xFFFFFFFF elements: a strict decoder must refuse it.
+      payload = {0x03, 0, 0, 0, '[', 'm', ']', 0xff, 0xff, 0xff, 0xff, 0x01, 0x00};
+    }
+    if (corrupt) h.flags = 0;
+    auto conn = c.conn;
+    if (delay.count() <= 0) {
+      conn->send(h, std::move(payload));
+      return;
+    }
+    auto timer = std::make_shared<asio::steady_timer>(io, delay);
+    timer->async_wait(
+        [timer, conn, h, payload = std::move(payload)](const boost::system::error_code&) mutable {
+          conn->send(h, std::move(payload));
+        });
+  }
+
+  void send_error(ConnState& c, const MessageHeader& call, const std::string& text) {
+    MessageHeader h = call;
+    h.type = MessageType::kError;
+    h.flags = 0;
+    send_reply(c, h, encode_error_text(text), false);
+  }
+
+  void on_message(ConnState& c, Message m) {
+    {
+      std::lock_guard lock(mutex);
+      ++stats.messages_received;
+    }
+    ++c.received;
+    if (options.disconnect_after_messages > 0 &&
+        c.received > static_cast<std::uint64_t>(options.disconnect_after_messages)) {
+      c.conn->close("fault injection: disconnect after " +
+                    std::to_string(options.disconnect_after_messages) + " messages");
+      return;
+    }
+    const MessageHeader& h = m.header;
+    if (h.type == MessageType::kCapability) return;
+    if (h.type != MessageType::kCall && h.type != MessageType::kPost) return;
+    const bool post = h.type == MessageType::kPost;
+
+    if (h.service == ids::kServerService) {
+      if (h.action == ids::kAuthenticateAction && !post) {
+        authenticate(c, m);
+      } else if (!post) {
+        send_error(c, h,
+                   "Expected authentication (service #0, type #Call, action #8), received "
+                   "service #0, type #Call, action #" +
+                       std::to_string(h.action));
+        if (!options.user.empty()) c.conn->close_after_flush("expected authentication");
+      }
+      return;
+    }
+    if (!c.authenticated) {
+      if (!post) send_error(c, h, "The call request could not be handled.");
+      if (!options.user.empty()) c.conn->close_after_flush("call before authentication");
+      return;
+    }
+    ServiceDef* svc = nullptr;
+    {
+      std::lock_guard lock(mutex);
+      auto it = services.find(h.service);
+      if (it != services.end()) svc = &it->second;
+    }
+    if (!svc || h.object != ids::kMainObject) {
+      if (!post) send_error(c, h, "The call request could not be handled.");
+      return;
+    }
+    auto mit = svc->methods.find(h.action);
+    if (mit == svc->methods.end()) {
+      if (!post) {
+        send_error(c, h,
+                   "No such method {" + std::to_string(h.service) + "." + std::to_string(h.object) +
+                       "." + std::to_string(h.action) + ", id:" + std::to_string(h.id) + "}");
+      }
+      return;
+    }
+    const MethodDef& md = mit->second;
+    std::vector<Value> args;
+    try {
+      Value v;
+      if (h.flags & flags::kDynamicPayload) {
+        v = convert(decode(Type::of(TypeKind::kDynamic), m.bytes(), options.limits), md.params);
+      } else {
+        v = decode(md.params, m.bytes(), options.limits, m.payload);
+      }
+      args = v.elements();
+    } catch (const ProtocolError&) {
+      {
+        std::lock_guard lock(mutex);
+        ++stats.protocol_errors;
+      }
+      if (!post) send_error(c, h, "ISerialization error Status Read Past End");
+      return;
+    }
+    if (svc->name == "ALVideoDevice" && md.meta.name == "getImageRemote") {
+      serve_image(c, h, args.at(0).as_string(), post);
+      return;
+    }
+    try {
+      Value result = md.fn(c, args);
+      if (post) return;
+      std::vector<std::uint8_t> payload;
+      MessageHeader r = h;
+      r.type = MessageType::kReply;
+      r.flags = 0;
+      r.flags = 0;
+      if (options.dynamic_replies) {
+        payload = encode(Value::dynamic(convert(result, md.ret)));
+        r.flags = flags::kDynamicPayload;
+      } else if (md.ret.kind != TypeKind::kVoid) {
+        payload = encode(convert(result, md.ret));
+      }
+      send_reply(c, r, std::move(payload));
+    } catch (const MethodFailure& e) {
+      if (!post) send_error(c, h, e.what());
+    } catch (const std::exception& e) {
+      if (!post) send_error(c, h, svc->name + "::" + md.meta.name + ": " + e.what());
+    }
+  }
+
+  void authenticate(ConnState& c, const Message& m) {
+    CapabilityMap theirs;
+    try {
+      theirs = decode_capabilities(m.bytes(), options.limits);
+    } catch (const ProtocolError& e) {
+      {
+        std::lock_guard lock(mutex);
+        ++stats.protocol_errors;
+      }
+      send_error(c, m.header,
+                 std::string("Authentication failed: malformed capability map: ") + e.what());
+      c.conn->close_after_flush("malformed authenticate");
+      return;
+    }
+    if (!options.user.empty()) {
+      auto get = [&](const char* k) -> std::string {
+        auto it = theirs.find(k);
+        if (it == theirs.end()) return {};
+        try {
+          return it->second.as_string();
+        } catch (const ProtocolError&) {
+          return {};
+        }
+      };
+      if (get("auth_user") != options.user || get("auth_token") != options.password) {
+        {
+          std::lock_guard lock(mutex);
+          ++stats.auth_failures;
+        }
+        send_error(c, m.header, "Authentication failed: invalid user or token [1.0]");
+        c.conn->close_after_flush("authentication failed");
+        return;
+      }
+    }
+    CapabilityMap mine;
+    if (!c.authenticated) {
+      mine["ClientServerSocket"] = Value::boolean(false);
+      mine["MessageFlags"] = Value::boolean(true);
+      mine["MetaObjectCache"] = Value::boolean(false);
+      mine["RemoteCancelableCalls"] = Value::boolean(false);
+    }
+    mine["__qi_auth_state"] = Value::uint32(3);
+    c.authenticated = true;
+    MessageHeader r = m.header;
+    r.type = MessageType::kReply;
+    r.flags = 0;
+    send_reply(c, r, encode_capabilities(mine), false);
+  }
+
+  /// Decides what to serve under the lock. Returns false when nothing is to be sent now
+  /// (stalled, paced for later); sets `unknown` for a handle that is not subscribed.
+  bool plan_image(ConnState& c, const MessageHeader& h, const std::string& handle, bool post,
+                  bool paced, Subscription& sub, bool& unknown, bool& repeat,
+                  ImageRemote& previous) {
+    std::lock_guard lock(mutex);
+    if (stall_frames) return false;  // never answered: the client sees frames stall
+    auto it = subscriptions.find(handle);
+    if (it == subscriptions.end()) {
+      unknown = true;
+      return true;
+    }
+    if (options.pace_frames && !paced) {
+      const auto now = std::chrono::steady_clock::now();
+      const auto period = std::chrono::microseconds(1'000'000 / std::max(1, it->second.fps));
+      const auto at = std::max(now, it->second.next_frame);
+      it->second.next_frame = at + period;
+      if (at > now) {
+        auto timer = std::make_shared<asio::steady_timer>(io, at);
+        std::weak_ptr<ConnState> weak;
+        for (const auto& s : conns) {
+          if (s.get() == &c) weak = s;
+        }
+        timer->async_wait([this, timer, weak, h, handle, post](const boost::system::error_code&) {
+          if (auto st = weak.lock()) serve_image(*st, h, handle, post, true);
+        });
+        return false;
+      }
+    }
+    sub = it->second;
+    ++image_requests;
+    if (options.drop_every_nth_frame > 0 &&
+        image_requests % static_cast<std::uint64_t>(options.drop_every_nth_frame) == 0 &&
+        last_image.count(handle)) {
+      repeat = true;
+      previous = last_image[handle];
+    }
+    return true;
+  }
+
+  void serve_image(ConnState& c, const MessageHeader& h, const std::string& handle, bool post,
+                   bool paced = false) {
+    Subscription sub;
+    bool repeat = false;
+    bool unknown = false;
+    ImageRemote previous;
+    if (!plan_image(c, h, handle, post, paced, sub, unknown, repeat, previous)) return;
+    if (unknown) {
+      if (!post) {
+        send_error(c, h, "ALVideoDevice::getImageRemote: unknown subscriber '" + handle + "'");
+      }
+      return;
+    }
+    if (post) return;
+    ImageRemote img;
+    if (repeat) {
+      img = previous;
+    } else {
+      const auto [w, hgt] = resolution_size(sub.resolution);
+      const core::Frame f = robot.capture(w, hgt);
+      const int layers = layers_for(sub.color_space);
+      auto pixels = std::make_shared<std::vector<std::uint8_t>>(static_cast<std::size_t>(w) *
+                                                                static_cast<std::size_t>(hgt) *
+                                                                static_cast<std::size_t>(layers));
+      for (int v = 0; v < hgt; ++v) {
+        const std::uint8_t* src = f.gray.ptr<std::uint8_t>(v);
+        std::uint8_t* dst = pixels->data() + static_cast<std::size_t>(v) * w * layers;
+        if (layers == 1) {
+          std::memcpy(dst, src, static_cast<std::size_t>(w));
+        } else {
+          for (int u = 0; u < w; ++u) {
+            for (int l = 0; l < layers; ++l)
+              dst[u * layers + l] = (l == 0 || layers == 3) ? src[u] : 128;
+          }
+        }
+      }
+      img.width_px = w;
+      img.height_px = hgt;
+      img.layers = layers;
+      img.color_space = sub.color_space;
+      img.t_sec = static_cast<std::int32_t>(f.t_ns / 1'000'000'000);
+      img.t_usec = static_cast<std::int32_t>((f.t_ns % 1'000'000'000) / 1000);
+      img.pixels.data = pixels->data();
+      img.pixels.size = pixels->size();
+      img.pixels.owner = pixels;
+      img.camera_index = sub.camera;
+      img.angles_rad = {0.4992f, 0.3866f, -0.4992f, -0.3866f};
+      std::lock_guard lock(mutex);
+      last_image[handle] = img;
+    }
+    std::vector<std::uint8_t> payload;
+    payload.reserve(img.pixels.size + 256);
+    Writer w(payload);
+    encode_image_remote(img, w);
+    {
+      std::lock_guard lock(mutex);
+      ++stats.frames_served;
+    }
+    MessageHeader r = h;
+    r.type = MessageType::kReply;
+    r.flags = 0;
+    send_reply(c, r, std::move(payload));
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+
+MockNaoqiServer::MockNaoqiServer(mock::SimRobot& robot, MockServerOptions options)
+    : impl_(std::make_shared<Impl>(robot, std::move(options))) {}
+
+MockNaoqiServer::~MockNaoqiServer() { stop(); }
+
+void MockNaoqiServer::start() { impl_->start(); }
+void MockNaoqiServer::stop() noexcept {
+  try {
+    impl_->stop();
+  } catch (...) {
+  }
+}
+
+std::string MockNaoqiServer::url() const { return impl_->url.to_string(); }
+std::uint16_t MockNaoqiServer::port() const { return impl_->url.port; }
+std::string MockNaoqiServer::certificate_sha256() const { return impl_->fingerprint; }
+
+void MockNaoqiServer::disconnect_all() {
+  auto self = impl_;
+  asio::post(impl_->io, [self] {
+    std::set<std::shared_ptr<ConnState>> all;
+    {
+      std::lock_guard lock(self->mutex);
+      all = self->conns;
+    }
+    for (const auto& c : all) c->conn->close("fault injection: disconnect on demand");
+  });
+}
+
+void MockNaoqiServer::set_stall_frames(bool stall) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->stall_frames = stall;
+}
+
+void MockNaoqiServer::set_reply_latency(std::chrono::milliseconds latency) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->latency = latency;
+}
+
+std::string MockNaoqiServer::autonomous_life_state() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->life_state;
+}
+bool MockNaoqiServer::basic_awareness_enabled() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->awareness_enabled;
+}
+bool MockNaoqiServer::external_collision_protection() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->collision_protection;
+}
+double MockNaoqiServer::stiffness(const std::string& joint) const {
+  std::lock_guard lock(impl_->mutex);
+  auto it = impl_->stiffness.find(joint);
+  return it == impl_->stiffness.end() ? 0.0 : it->second;
+}
+std::vector<std::string> MockNaoqiServer::video_subscribers() const {
+  std::lock_guard lock(impl_->mutex);
+  std::vector<std::string> out;
+  for (const auto& [k, v] : impl_->subscriptions) out.push_back(k);
+  return out;
+}
+MockNaoqiServer::Stats MockNaoqiServer::stats() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->stats;
+}
+
+}  // namespace pepper::naoqi_bridge::qi

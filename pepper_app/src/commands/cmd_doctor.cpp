@@ -1,0 +1,276 @@
+// `pepper_app doctor`: checks a robot connection the way a user wants before a demo: reachable,
+// logged in, services present, camera streaming, head lock holding, base accepting commands.
+// One line per check, OK or FAIL with the reason; exit code 0 only when every check passes.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "commands/commands.hpp"
+#include "naoqi_bridge/qi/errors.hpp"
+#include "naoqi_bridge/qi/qi_bridge.hpp"
+#include "naoqi_bridge/qi/session.hpp"
+
+namespace pepper::app {
+
+namespace {
+
+namespace qi = pepper::naoqi_bridge::qi;
+namespace nb = pepper::naoqi_bridge;
+using Clock = std::chrono::steady_clock;
+
+struct DoctorArgs {
+  std::string robot;
+  std::string user;
+  std::string password_file;
+  std::string tls_pin;
+  double camera_seconds = 3.0;
+  int timeout_ms = 5000;
+};
+
+class Report {
+ public:
+  void ok(const std::string& check, const std::string& msg) { line("OK  ", check, msg); }
+  void fail(const std::string& check, const std::string& msg) {
+    line("FAIL", check, msg);
+    ++failures_;
+  }
+  int failures() const { return failures_; }
+
+ private:
+  void line(const char* tag, const std::string& check, const std::string& msg) {
+    std::cout << tag << "  " << std::left << std::setw(24) << check << " " << msg << "\n"
+              << std::flush;
+  }
+  int failures_ = 0;
+};
+
+std::string classify(const std::exception& e) {
+  if (dynamic_cast<const qi::AuthenticationError*>(&e)) return std::string("login: ") + e.what();
+  if (dynamic_cast<const qi::TlsError*>(&e)) return std::string("TLS: ") + e.what();
+  if (dynamic_cast<const qi::ConnectError*>(&e)) {
+    return std::string("host unreachable: ") + e.what();
+  }
+  if (dynamic_cast<const qi::ServiceNotFound*>(&e))
+    return std::string("missing service: ") + e.what();
+  if (dynamic_cast<const qi::CallTimeout*>(&e)) return std::string("timeout: ") + e.what();
+  if (dynamic_cast<const qi::ConnectionLost*>(&e))
+    return std::string("connection lost: ") + e.what();
+  return e.what();
+}
+
+std::string fmt(double v, int decimals) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(decimals) << v;
+  return os.str();
+}
+
+struct ServiceCheck {
+  const char* name;
+  std::vector<std::pair<const char*, const char*>> methods;  // name, parameters signature
+};
+
+int run_doctor(const DoctorArgs& a) {
+  Report report;
+  qi::QiBridgeOptions o;
+  o.url = a.robot;
+  o.user = a.user;
+  o.tls_pin_sha256 = a.tls_pin;
+  o.connect_timeout = std::chrono::milliseconds(a.timeout_ms);
+  o.call_timeout = std::chrono::milliseconds(a.timeout_ms);
+  o.subscriber_name = "pepper_doctor";
+  if (!a.user.empty()) {
+    if (!a.password_file.empty()) {
+      o.password = qi::read_password_file(a.password_file);
+    } else if (auto env = qi::read_password_env("PEPPER_PASSWORD")) {
+      o.password = *env;
+    } else {
+      o.password = qi::prompt_password("Password for " + a.user + "@" + a.robot + ": ");
+    }
+  }
+  const auto errors = o.validate();
+  if (!errors.empty()) {
+    for (const auto& e : errors) std::cerr << "pepper_app doctor: " << e << "\n";
+    return 2;
+  }
+  const char* skipped = "not checked: no connection";
+
+  // 1. Connection and login, and the services the bridge uses.
+  qi::SessionOptions so;
+  so.connect_timeout = o.connect_timeout;
+  so.call_timeout = o.call_timeout;
+  so.user = o.user;
+  so.password = o.password;
+  so.tls_pin_sha256 = o.tls_pin_sha256;
+  qi::QiSession session(so);
+  const std::vector<ServiceCheck> services = {
+      {"ALMotion",
+       {{"wakeUp", "()"},
+        {"setStiffnesses", "(mm)"},
+        {"setAngles", "(mmf)"},
+        {"getAngles", "(mb)"},
+        {"move", "(fff)"},
+        {"stopMove", "()"}}},
+      {"ALVideoDevice",
+       {{"subscribeCamera", "(siiii)"}, {"getImageRemote", "(s)"}, {"unsubscribe", "(s)"}}},
+      {"ALAutonomousLife", {{"getState", "()"}, {"setState", "(s)"}}},
+      {"ALBasicAwareness", {{"isEnabled", "()"}, {"setEnabled", "(b)"}}},
+  };
+  const auto t0 = Clock::now();
+  try {
+    session.connect(a.robot);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    std::string msg = "connected to " + session.describe() + " in " + fmt(ms, 0) + " ms";
+    if (!session.peer_certificate_sha256().empty()) {
+      msg += "; TLS certificate SHA-256 " + session.peer_certificate_sha256() +
+             (a.tls_pin.empty() ? " (not pinned: pin it with --tls-pin)" : " (pinned)");
+    }
+    report.ok("connect", msg);
+  } catch (const std::exception& e) {
+    report.fail("connect", classify(e));
+    for (const auto& s : services) report.fail(std::string("service ") + s.name, skipped);
+    for (const char* c : {"camera", "head lock", "base"}) report.fail(c, skipped);
+    return 1;
+  }
+  for (const auto& s : services) {
+    const std::string check = std::string("service ") + s.name;
+    try {
+      const auto h = session.service(s.name);
+      std::string missing;
+      for (const auto& [m, sig] : s.methods) {
+        if (!h.meta.find(m, sig)) missing += (missing.empty() ? "" : ", ") + std::string(m) + sig;
+      }
+      if (missing.empty()) {
+        report.ok(check, "present (id " + std::to_string(h.id) + ", " +
+                             std::to_string(h.meta.methods.size()) + " methods)");
+      } else {
+        report.fail(check, "present but lacks " + missing + " (unsupported NAOqi version?)");
+      }
+    } catch (const std::exception& e) {
+      report.fail(check, classify(e));
+    }
+  }
+  session.close();
+
+  // 2. Camera, head lock and base through the bridge, as a session would use them.
+  qi::QiBridge bridge(o);
+  try {
+    bridge.connect();
+  } catch (const std::exception& e) {
+    for (const char* c : {"camera", "head lock", "base"}) report.fail(c, classify(e));
+    return 1;
+  }
+  try {
+    nb::CameraRequest req;  // VGA grey, 15 fps
+    bridge.start_camera(req);
+    int frames = 0;
+    std::int64_t first_t = -1;
+    std::int64_t last_t = -1;
+    int w = 0, h = 0;
+    const auto start = Clock::now();
+    const auto until = start + std::chrono::milliseconds(static_cast<int>(a.camera_seconds * 1000));
+    while (Clock::now() < until) {
+      auto f = bridge.next_frame(std::chrono::milliseconds(a.timeout_ms));
+      if (!f) break;
+      if (first_t < 0) first_t = f->t_ns;
+      last_t = f->t_ns;
+      w = f->gray.cols;
+      h = f->gray.rows;
+      ++frames;
+    }
+    const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+    const double rate = frames / std::max(wall_s, 1e-3);
+    const std::string size = std::to_string(w) + "x" + std::to_string(h);
+    const std::string detail = std::to_string(frames) + " frames in " + fmt(wall_s, 1) +
+                               " s: " + fmt(rate, 1) + " fps received, " + size + " grey, " +
+                               fmt(rate * w * h / 1e6, 1) + " MB/s";
+    if (frames < 2) {
+      report.fail("camera", "no frames streamed (" + detail + ")");
+    } else if (w != 640 || h != 480) {
+      report.fail("camera", "unexpected frame size " + size + " (asked 640x480)");
+    } else if (last_t <= first_t) {
+      report.fail("camera", "robot timestamps do not advance (" + detail + ")");
+    } else if (rate < 5.0) {
+      report.fail("camera",
+                  "too slow for navigation, < 5 fps (" + detail + "; check the WiFi link)");
+    } else {
+      report.ok("camera", detail);
+    }
+  } catch (const std::exception& e) {
+    report.fail("camera", classify(e));
+  }
+  try {
+    nb::HeadLockRequest req;
+    const auto st = bridge.lock_head(req);
+    const std::string detail = "HeadYaw " + fmt(st.head_yaw_rad, 3) + " rad, HeadPitch " +
+                               fmt(st.head_pitch_rad, 3) + " rad, max error " +
+                               fmt(st.max_error_rad, 3) + " rad (tolerance " +
+                               fmt(req.tolerance_rad, 3) + ")";
+    if (st.holding) {
+      report.ok("head lock", "holds: " + detail);
+    } else {
+      report.fail("head lock", "does not hold: " + detail +
+                                   " (is the robot awake, the hatch closed, awareness off?)");
+    }
+  } catch (const std::exception& e) {
+    report.fail("head lock", classify(e));
+  }
+  try {
+    const auto t = Clock::now();
+    bridge.move({0.0, 0.0, 0.0});
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    bridge.stop();
+    report.ok("base",
+              "zero-velocity move accepted (round trip " + fmt(ms, 2) + " ms), stopMove sent");
+  } catch (const std::exception& e) {
+    report.fail("base", classify(e) + " (charging hatch open? motion calls are refused then)");
+  }
+  bridge.release();
+  std::cout << (report.failures() == 0 ? "all checks passed\n"
+                                       : std::to_string(report.failures()) + " check(s) failed\n");
+  return report.failures() == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+void register_doctor_command(CLI::App& app) {
+  auto args = std::make_shared<DoctorArgs>();
+  auto* cmd = app.add_subcommand(
+      "doctor",
+      "Check a robot connection before a demo: reachability, TLS and login, the NAOqi services "
+      "used, camera streaming rate and frame size, head lock read-back, and a zero-velocity "
+      "move. One line per check; exit code 0 only when all pass.");
+  cmd->add_option("--robot", args->robot, "Robot URL: tcp://HOST:9559 or tcps://HOST:9503")
+      ->required();
+  cmd->add_option("--user", args->user,
+                  "Login user (NAOqi 2.9: nao); the password comes from "
+                  "--password-file, PEPPER_PASSWORD or a prompt");
+  cmd->add_option("--password-file", args->password_file, "File whose first line is the password");
+  cmd->add_option("--tls-pin", args->tls_pin,
+                  "Expected SHA-256 fingerprint of the robot's TLS "
+                  "certificate (hex, colons optional)");
+  cmd->add_option("--camera-seconds", args->camera_seconds,
+                  "How long to stream for the camera "
+                  "check")
+      ->capture_default_str();
+  cmd->add_option("--timeout-ms", args->timeout_ms, "Connect and call timeout")
+      ->capture_default_str();
+  cmd->footer(
+      "Examples:\n"
+      "  pepper_app doctor --robot tcp://10.0.0.5:9559\n"
+      "  pepper_app doctor --robot tcps://10.0.0.5:9503 --user nao --password-file ~/.pepper_pw");
+  cmd->callback([args] {
+    try {
+      exit_code() = run_doctor(*args);
+    } catch (const std::exception& e) {
+      std::cerr << "pepper_app doctor: " << e.what() << "\n";
+      exit_code() = 1;
+    }
+  });
+}
+
+}  // namespace pepper::app

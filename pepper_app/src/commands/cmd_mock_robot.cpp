@@ -1,0 +1,164 @@
+// `pepper_app mock-robot`: serve a simulated Pepper over the qi-messaging protocol (the mock
+// NAOqi server of naoqi_bridge/qi), until Ctrl-C. See docs/naoqi_bridge.md.
+#include <pthread.h>
+
+#include <csignal>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands/commands.hpp"
+#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "naoqi_bridge/mock/synthetic_pattern_robot.hpp"
+#include "naoqi_bridge/mock/world.hpp"
+#include "naoqi_bridge/qi/mock_server.hpp"
+#include "naoqi_bridge/qi/session.hpp"
+
+namespace pepper::app {
+
+namespace {
+
+namespace qi = pepper::naoqi_bridge::qi;
+namespace mock = pepper::naoqi_bridge::mock;
+
+struct MockRobotArgs {
+  std::string listen = "tcp://127.0.0.1:9559";
+  std::string world;
+  std::string user;
+  std::string password_file;
+  std::string tls_cert;
+  std::string tls_key;
+  int latency_ms = 0;
+  int drop_every = 0;
+  int disconnect_after = 0;
+  int malformed_every = 0;
+  double rate_hz = 15.0;
+  bool legacy_service_info = false;
+  bool lockstep = false;
+};
+
+int run_mock_robot(const MockRobotArgs& a) {
+  qi::MockServerOptions so;
+  so.listen_url = a.listen;
+  so.tls_certificate_file = a.tls_cert;
+  so.tls_private_key_file = a.tls_key;
+  so.reply_latency = std::chrono::milliseconds(a.latency_ms);
+  so.drop_every_nth_frame = a.drop_every;
+  so.disconnect_after_messages = a.disconnect_after;
+  so.malformed_reply_every_nth = a.malformed_every;
+  so.legacy_service_info = a.legacy_service_info;
+  so.pace_frames = !a.lockstep;
+  if (!a.user.empty()) {
+    so.user = a.user;
+    if (!a.password_file.empty()) {
+      so.password = qi::read_password_file(a.password_file);
+    } else if (auto env = qi::read_password_env("PEPPER_PASSWORD")) {
+      so.password = *env;
+    } else {
+      so.password = qi::prompt_password("Password the mock robot expects for '" + a.user + "': ");
+    }
+  }
+  const auto errors = so.validate();
+  if (!errors.empty()) {
+    for (const auto& e : errors) std::cerr << "pepper_app mock-robot: " << e << "\n";
+    return 2;
+  }
+
+  std::unique_ptr<mock::SimRobot> robot;
+  std::string what;
+  if (!a.world.empty()) {
+    auto world = std::make_shared<const mock::World>(mock::load_world(a.world));
+    mock::MockRobotOptions ro;
+    ro.frame_rate_hz = a.rate_hz;
+    robot = std::make_unique<mock::MockRobot>(world, ro);
+    what = "textured world " + a.world;
+  } else {
+    mock::SyntheticPatternOptions ro;
+    ro.frame_rate_hz = a.rate_hz;
+    robot = std::make_unique<mock::SyntheticPatternRobot>(ro);
+    what = "synthetic test pattern";
+  }
+
+  // Block the stop signals in every thread (the server's I/O thread inherits the mask), then
+  // wait for them here.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  qi::MockNaoqiServer server(*robot, so);
+  server.start();
+  std::cout << "mock NAOqi serving a simulated Pepper (" << what << ") on " << server.url() << "\n";
+  if (!server.certificate_sha256().empty()) {
+    std::cout << "TLS certificate SHA-256: " << server.certificate_sha256() << "\n";
+  }
+  if (!a.user.empty()) std::cout << "login required: user '" << a.user << "'\n";
+  std::cout << "connect with: pepper_app doctor --robot " << server.url()
+            << (a.user.empty() ? "" : " --user " + a.user) << "\nCtrl-C to stop.\n"
+            << std::flush;
+  int sig = 0;
+  sigwait(&stop_signals, &sig);
+  const auto st = server.stats();
+  server.stop();
+  std::cout << "\nstopped (" << (sig == SIGINT ? "SIGINT" : "SIGTERM")
+            << "): " << st.connections_accepted << " connections, " << st.messages_received
+            << " messages, " << st.frames_served << " frames, " << st.auth_failures
+            << " failed logins, " << st.base_stops_on_disconnect << " base stops on disconnect\n";
+  return 0;
+}
+
+}  // namespace
+
+void register_mock_robot_command(CLI::App& app) {
+  auto args = std::make_shared<MockRobotArgs>();
+  auto* cmd = app.add_subcommand(
+      "mock-robot",
+      "Serve a simulated Pepper over NAOqi's qi-messaging protocol (tcp:// or tcps://) until "
+      "Ctrl-C, so the real client (doctor, teach, replay) can connect to it.");
+  cmd->add_option("--listen", args->listen,
+                  "URL to listen on, tcp://HOST:PORT or tcps://HOST:PORT"
+                  " (port 0: any free port)")
+      ->capture_default_str();
+  cmd->add_option("--world", args->world,
+                  "World YAML for the textured-world MockRobot "
+                  "(default: a synthetic moving test pattern)");
+  cmd->add_option("--user", args->user,
+                  "Require this login user (password from --password-file, "
+                  "PEPPER_PASSWORD or a prompt)");
+  cmd->add_option("--password-file", args->password_file, "File whose first line is the password");
+  cmd->add_option("--tls-cert", args->tls_cert,
+                  "PEM certificate for tcps (default: self-signed, "
+                  "generated at start-up)");
+  cmd->add_option("--tls-key", args->tls_key, "PEM private key for --tls-cert");
+  cmd->add_option("--rate", args->rate_hz, "Simulated camera frame rate, Hz (lockstep clock)")
+      ->capture_default_str();
+  cmd->add_option("--latency-ms", args->latency_ms, "Fault injection: delay every reply")
+      ->capture_default_str();
+  cmd->add_option("--drop-every", args->drop_every,
+                  "Fault injection: every Nth image request returns the previous image (0 off)");
+  cmd->add_option("--disconnect-after", args->disconnect_after,
+                  "Fault injection: close each connection after N messages (0 off)");
+  cmd->add_option("--malformed-every", args->malformed_every,
+                  "Fault injection: corrupt every Nth non-empty reply (0 off)");
+  cmd->add_flag("--lockstep", args->lockstep,
+                "Serve frames as fast as they are requested (simulated time runs faster than real "
+                "time) instead of at the subscribed fps");
+  cmd->add_flag("--legacy-service-info", args->legacy_service_info,
+                "Answer NAOqi 2.5's 6-field ServiceInfo instead of libqi 4's 7 fields");
+  cmd->footer(
+      "Examples:\n"
+      "  pepper_app mock-robot --listen tcp://127.0.0.1:9559\n"
+      "  pepper_app mock-robot --listen tcp://127.0.0.1:9559 --world worlds/corridor/world.yaml\n"
+      "  PEPPER_PASSWORD=pepper pepper_app mock-robot --listen tcps://127.0.0.1:9503 --user nao");
+  cmd->callback([args] {
+    try {
+      exit_code() = run_mock_robot(*args);
+    } catch (const std::exception& e) {
+      std::cerr << "pepper_app mock-robot: " << e.what() << "\n";
+      exit_code() = 1;
+    }
+  });
+}
+
+}  // namespace pepper::app
