@@ -1,0 +1,178 @@
+#pragma once
+// Verified correspondences between images: the counts n(A,B), nL(A,B,C), nP(A,B,C) of
+// METHOD.md are sizes of the verified sets returned here.
+//
+// Two views (key image K, current image C):
+//  - lines: LBD-style descriptors matched by L2 distance, mutual best + ratio test, then a
+//    geometric check: planar motion keeps vertical lines vertical (a line near-vertical in one
+//    view must be near-vertical in the other), the image orientation may change by at most
+//    `max_angle_change_rad`, and, when the point RANSAC found E, the segments must overlap along
+//    the epipolar lines (`epipolar_overlap`);
+//  - points: K's FAST corners tracked into C with pyramidal KLT, then five-point essential
+//    RANSAC (geometry/essential_ransac.hpp).
+// Three views (X, hub H, Y) with the hub in the middle of the chain X -> H <- Y (the navigator's
+// hub is the current image: (IP, Ia, IN) and (Ia, IN, INN) both chain through Ia; teach's
+// (Ik, Ic-1, Ic) chains through Ic):
+//  - lines: two-view line matches X-H and Y-H chained through H's line index, then planar-motion
+//    trifocal RANSAC (geometry/planar_trifocal.hpp) with H as reference view 0;
+//  - points: verified KLT tracks X -> H and Y -> H whose end points in H are mutual nearest
+//    neighbours within `three_view_point_radius_px`.
+// Wide baseline (initial localisation): ORB matching (Hamming, mutual + ratio) + essential RANSAC
+// for points, the two-view line matching for lines.
+//
+// Per-frame reuse: FrameMatcher holds one current image and caches its two-view results per key
+// image id, so every pairwise computation (line matching, KLT, essential RANSAC, wide-baseline
+// matching) runs once per frame whatever the number of three-view queries.
+// Indices: LineMatch/PointMatch indices refer to each view's ImageFeatures::lines, corners_px
+// (KLT) or keypoints (wide baseline). Normalised coordinates use each view's own intrinsics.
+// Thread-safety: free functions are reentrant; a FrameMatcher is not thread-safe (one per frame).
+
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core/matx.hpp>
+#include <opencv2/core/types.hpp>
+
+#include "core/features/image_features.hpp"
+#include "core/geometry/essential_ransac.hpp"
+#include "core/geometry/planar_trifocal.hpp"
+
+namespace pepper::core::features {
+
+struct LineMatchOptions {
+  double ratio = 0.85;                    ///< best / second-best distance must be below (0, 1]
+  bool mutual = true;                     ///< keep only mutual best matches
+  double max_descriptor_distance = 0.9;   ///< L2 on unit-norm descriptors, (0, 2]
+  double max_angle_change_rad = 0.7854;   ///< |theta_a - theta_b| (mod pi) at most 45 deg
+  double vertical_tolerance_rad = 0.0873; ///< "near vertical": |theta| below 5 deg
+  double vertical_mismatch_rad = 0.2618;  ///< a near-vertical line must stay within 15 deg
+  bool epipolar_overlap = true;           ///< check segment overlap along epipolars when E known
+  std::vector<std::string> validate() const;
+};
+
+struct MatcherOptions {
+  LineMatchOptions lines;
+  KltOptions klt;                          ///< must match the key images' pyramid options
+  geometry::EssentialRansacOptions essential;
+  geometry::PlanarTrifocalOptions trifocal;
+  double three_view_point_radius_px = 2.0; ///< X->H and Y->H tracks meet within this, px
+  double orb_ratio = 0.8;                  ///< wide baseline ratio test
+  int orb_max_hamming = 64;                ///< wide baseline max Hamming distance (0..256)
+  std::vector<std::string> validate() const;
+};
+
+struct LineMatch {
+  int idx_a = -1;          ///< index into view a's lines
+  int idx_b = -1;          ///< index into view b's lines
+  float distance = 0.0f;   ///< descriptor distance
+};
+
+struct PointMatch {
+  int idx_a = -1;          ///< index into a's corners_px (KLT) or keypoints (wide baseline)
+  int idx_b = -1;          ///< index into b's keypoints (wide baseline); -1 for KLT tracks
+  cv::Point2f a_px;
+  cv::Point2f b_px;
+  cv::Point2d a_norm;
+  cv::Point2d b_norm;
+};
+
+/// Verified correspondences between view a (key image) and view b (current image).
+struct TwoViewMatches {
+  std::vector<LineMatch> lines;    ///< verified line matches
+  std::vector<PointMatch> points;  ///< verified point matches (passed essential RANSAC)
+  int line_candidates = 0;         ///< after mutual + ratio, before geometric checks
+  int point_candidates = 0;        ///< KLT tracks (or ORB matches) before RANSAC
+  bool essential_found = false;
+  cv::Matx33d E_b_a = cv::Matx33d::zeros();
+
+  int n_lines() const { return static_cast<int>(lines.size()); }
+  int n_points() const { return static_cast<int>(points.size()); }
+  int total() const { return n_lines() + n_points(); }  ///< n(A, B) of METHOD.md
+};
+
+struct LineTripletMatch {
+  int idx_x = -1;    ///< index into X's lines
+  int idx_hub = -1;  ///< index into the hub's lines
+  int idx_y = -1;    ///< index into Y's lines
+};
+
+struct PointTripletMatch {
+  int idx_x = -1;      ///< index into X's corners_px
+  int idx_y = -1;      ///< index into Y's corners_px
+  cv::Point2f hub_px;  ///< mean of the two tracked positions in the hub
+  cv::Point2d hub_norm;
+};
+
+/// Verified three-view correspondences for the chain X -> hub <- Y.
+struct ThreeViewMatches {
+  std::vector<LineTripletMatch> lines;     ///< nL(X, hub, Y)
+  std::vector<PointTripletMatch> points;   ///< nP(X, hub, Y)
+  int line_candidates = 0;                 ///< chained triplets before RANSAC
+  geometry::PlanarTrifocalResult trifocal; ///< RANSAC diagnostics (motion of X, Y w.r.t. hub)
+
+  int n_lines() const { return static_cast<int>(lines.size()); }
+  int n_points() const { return static_cast<int>(points.size()); }
+  int total() const { return n_lines() + n_points(); }
+};
+
+/// Descriptor matching (mutual + ratio) followed by the orientation checks; no epipolar check.
+std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& b,
+                                   const LineMatchOptions& options = {});
+
+/// Two-view verified lines and points, KLT from a (key, needs corners_px) into b (current).
+/// b.klt_pyramid is used when built with the same KltOptions (else built on the fly).
+TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
+                              const MatcherOptions& options = {});
+
+/// Wide-baseline verified lines and points (ORB keypoints of both views).
+TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& b,
+                                   const MatcherOptions& options = {});
+
+/// Three-view verification from two two-view results sharing the hub as their view b.
+ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches& x_to_hub,
+                                   const ImageFeatures& hub, const ImageFeatures& y,
+                                   const TwoViewMatches& y_to_hub,
+                                   const MatcherOptions& options = {});
+
+/// The work of one current frame against several key images, each pairwise result computed once.
+/// Key images are identified by a caller-chosen id (e.g. the key image index in the map; any
+/// unique int64, e.g. a negative value for the previous frame in teach). Using one id for two
+/// different images is a caller error (the cache would return the first image's result).
+/// The referenced ImageFeatures must outlive the calls that pass them (nothing is retained but
+/// the current frame's features, shared cv::Mat buffers).
+class FrameMatcher {
+ public:
+  /// Builds the current frame's KLT pyramid if missing. Throws std::invalid_argument when the
+  /// options are invalid or `current` has no image.
+  explicit FrameMatcher(ImageFeatures current, const MatcherOptions& options = {});
+
+  const ImageFeatures& current() const { return current_; }
+  const MatcherOptions& options() const { return options_; }
+
+  /// n(key, current): verified lines + KLT points (cached per key id).
+  const TwoViewMatches& two_view(int64_t key_id, const ImageFeatures& key);
+
+  /// nL, nP for (x, current, y): the three-view sets of the chain x -> current <- y (cached per
+  /// ordered pair of ids: the result's idx_x/idx_y follow the argument order).
+  const ThreeViewMatches& three_view(int64_t x_id, const ImageFeatures& x, int64_t y_id,
+                                     const ImageFeatures& y);
+
+  /// Wide-baseline (ORB) verified lines + points of key vs current (cached per key id); the
+  /// current image must have been extracted with kPartWideBaseline.
+  const TwoViewMatches& wide_baseline(int64_t key_id, const ImageFeatures& key);
+
+ private:
+  struct PairHash {
+    size_t operator()(const std::pair<int64_t, int64_t>& p) const noexcept;
+  };
+  ImageFeatures current_;
+  MatcherOptions options_;
+  std::unordered_map<int64_t, TwoViewMatches> two_view_;
+  std::unordered_map<int64_t, TwoViewMatches> wide_;
+  std::unordered_map<std::pair<int64_t, int64_t>, ThreeViewMatches, PairHash> three_view_;
+};
+
+}  // namespace pepper::core::features

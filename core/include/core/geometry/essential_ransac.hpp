@@ -1,0 +1,39 @@
+#pragma once
+// Two-view point verification: five-point essential-matrix RANSAC (cv::findEssentialMat, Nister's
+// solver) on normalised image coordinates (METHOD.md "Features and verification": a point match
+// counts only if it passes five-point essential RANSAC).
+//
+// Inputs: matched points in normalised coordinates of view a and view b (same length); the
+// threshold is given in pixels and converted with `focal_px` (threshold_norm = threshold_px /
+// focal_px). Output: inlier indices into the inputs, and E with x_b^T E x_a = 0.
+// Fewer than 5 (or `min_inliers`) matches, or no model: found = false, no inliers (a value,
+// not an exception). Deterministic: OpenCV's RANSAC uses a fixed-seed RNG.
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core/matx.hpp>
+#include <opencv2/core/types.hpp>
+
+namespace pepper::core::geometry {
+
+struct EssentialRansacOptions {
+  double threshold_px = 1.0;   ///< Sampson distance threshold, px (OpenCV's point-to-epiline)
+  double confidence = 0.999;   ///< RANSAC confidence, (0, 1)
+  int max_iterations = 1000;   ///< RANSAC cap
+  int min_inliers = 8;         ///< below this, the result is "not found" (5..)
+  std::vector<std::string> validate() const;
+};
+
+struct EssentialResult {
+  bool found = false;
+  cv::Matx33d E_b_a = cv::Matx33d::zeros();  ///< x_b^T E x_a = 0 (normalised homogeneous points)
+  std::vector<int> inliers;                   ///< indices into the input arrays, increasing
+};
+
+/// Throws std::invalid_argument if sizes differ, focal_px <= 0 or options are invalid.
+EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
+                                 const std::vector<cv::Point2d>& b_norm, double focal_px,
+                                 const EssentialRansacOptions& options = {});
+
+}  // namespace pepper::core::geometry

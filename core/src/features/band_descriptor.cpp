@@ -1,0 +1,129 @@
+// LBD-style band descriptor (see band_descriptor.hpp).
+#include "core/features/band_descriptor.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace pepper::core::features {
+namespace {
+
+constexpr int kBands = 9;
+constexpr float kClip = 0.4f;
+
+struct GradientSampler {
+  const cv::Mat& img;
+  int w, h;
+  explicit GradientSampler(const cv::Mat& g) : img(g), w(g.cols), h(g.rows) {}
+  // Central-difference gradient at the nearest pixel, replicated border.
+  inline void at(float x, float y, float& gx, float& gy) const {
+    // Nearest pixel; truncation of x + 0.5 is rounding for x >= -0.5, and anything below is
+    // clamped to the border anyway.
+    const int xi = std::clamp(static_cast<int>(x + 0.5f), 0, w - 1);
+    const int yi = std::clamp(static_cast<int>(y + 0.5f), 0, h - 1);
+    const int xm = std::max(xi - 1, 0), xp = std::min(xi + 1, w - 1);
+    const int ym = std::max(yi - 1, 0), yp = std::min(yi + 1, h - 1);
+    const uchar* row = img.ptr<uchar>(yi);
+    gx = static_cast<float>(row[xp]) - static_cast<float>(row[xm]);
+    gy = static_cast<float>(img.ptr<uchar>(yp)[xi]) - static_cast<float>(img.ptr<uchar>(ym)[xi]);
+  }
+};
+
+}  // namespace
+
+void orient_segment(const cv::Mat& gray, cv::Point2f& p0_px, cv::Point2f& p1_px) {
+  const cv::Point2f dvec = p1_px - p0_px;
+  const float len = std::hypot(dvec.x, dvec.y);
+  if (len < 1e-3f || gray.empty()) return;
+  const cv::Point2f d = dvec * (1.0f / len);
+  const cv::Point2f n(d.y, -d.x);
+  GradientSampler s(gray);
+  const int samples = std::clamp(static_cast<int>(len / 2.0f), 2, 32);
+  float acc = 0.0f;
+  for (int k = 0; k < samples; ++k) {
+    const cv::Point2f c = p0_px + dvec * ((k + 0.5f) / samples);
+    // Gradient sampled one pixel either side of the line too: edges may sit between pixels.
+    for (int o = -1; o <= 1; ++o) {
+      float gx, gy;
+      s.at(c.x + o * n.x, c.y + o * n.y, gx, gy);
+      acc += gx * n.x + gy * n.y;
+    }
+  }
+  if (acc < 0.0f) std::swap(p0_px, p1_px);
+}
+
+cv::Mat compute_band_descriptors(const cv::Mat& gray,
+                                 const std::vector<std::pair<cv::Point2f, cv::Point2f>>& segments,
+                                 int band_width_px, int samples_along) {
+  const int rows = kBands * band_width_px;
+  cv::Mat desc(static_cast<int>(segments.size()), kBands * 8, CV_32F, cv::Scalar(0));
+  if (segments.empty() || gray.empty()) return desc;
+  GradientSampler sampler(gray);
+
+  // Global Gaussian weight over the row offset (sigma = half the region width).
+  std::vector<float> wg(rows);
+  const float half = 0.5f * static_cast<float>(rows - 1);
+  const float sigma_g = 0.5f * static_cast<float>(rows);
+  for (int r = 0; r < rows; ++r) {
+    const float o = static_cast<float>(r) - half;
+    wg[r] = std::exp(-0.5f * o * o / (sigma_g * sigma_g));
+  }
+  std::vector<std::array<float, 4>> row_sums(rows);
+
+  for (size_t i = 0; i < segments.size(); ++i) {
+    const cv::Point2f p0 = segments[i].first;
+    const cv::Point2f dvec = segments[i].second - p0;
+    const float len = std::hypot(dvec.x, dvec.y);
+    if (len < 1.0f) continue;
+    const cv::Point2f d = dvec * (1.0f / len);
+    const cv::Point2f n(d.y, -d.x);
+    const int samples = std::clamp(static_cast<int>(len), 2, samples_along);
+    for (auto& rs : row_sums) rs = {0.f, 0.f, 0.f, 0.f};
+    for (int k = 0; k < samples; ++k) {
+      const cv::Point2f c = p0 + dvec * ((k + 0.5f) / samples);
+      for (int r = 0; r < rows; ++r) {
+        const float o = static_cast<float>(r) - half;
+        float gx, gy;
+        sampler.at(c.x + o * n.x, c.y + o * n.y, gx, gy);
+        const float gp = gx * n.x + gy * n.y;
+        const float gl = gx * d.x + gy * d.y;
+        auto& rs = row_sums[r];
+        if (gp > 0) rs[0] += gp; else rs[1] -= gp;
+        if (gl > 0) rs[2] += gl; else rs[3] -= gl;
+      }
+    }
+    float* out = desc.ptr<float>(static_cast<int>(i));
+    const float inv_samples = 1.0f / static_cast<float>(samples);
+    for (int b = 0; b < kBands; ++b) {
+      std::array<float, 4> mean{0, 0, 0, 0}, sq{0, 0, 0, 0};
+      for (int r = b * band_width_px; r < (b + 1) * band_width_px; ++r) {
+        for (int c = 0; c < 4; ++c) {
+          const float v = row_sums[r][c] * wg[r] * inv_samples;
+          mean[c] += v;
+          sq[c] += v * v;
+        }
+      }
+      for (int c = 0; c < 4; ++c) {
+        const float m = mean[c] / band_width_px;
+        const float var = std::max(sq[c] / band_width_px - m * m, 0.0f);
+        out[b * 4 + c] = m;
+        out[kBands * 4 + b * 4 + c] = std::sqrt(var);
+      }
+    }
+    // Normalise means and deviations separately, clip, renormalise.
+    auto normalise = [](float* v, int count) {
+      float s = 0.f;
+      for (int j = 0; j < count; ++j) s += v[j] * v[j];
+      if (s <= 1e-20f) return;
+      const float inv = 1.0f / std::sqrt(s);
+      for (int j = 0; j < count; ++j) v[j] *= inv;
+    };
+    normalise(out, kBands * 4);
+    normalise(out + kBands * 4, kBands * 4);
+    for (int j = 0; j < kBands * 8; ++j) out[j] = std::min(out[j], kClip);
+    normalise(out, kBands * 8);
+  }
+  return desc;
+}
+
+}  // namespace pepper::core::features

@@ -1,0 +1,218 @@
+// Feature extraction: EDLines + band descriptors, FAST corners, ORB, KLT pyramid.
+#include "core/features/image_features.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <opencv2/ximgproc/edge_drawing.hpp>
+
+#include "core/features/band_descriptor.hpp"
+
+namespace pepper::core::features {
+namespace {
+
+template <typename T>
+void check_range(std::vector<std::string>& errors, const char* name, T value, T lo, T hi) {
+  if (!(value >= lo && value <= hi)) {
+    std::ostringstream os;
+    os << name << " = " << value << " must be in [" << lo << ", " << hi << "]";
+    errors.push_back(os.str());
+  }
+}
+
+std::string join(const std::vector<std::string>& errors) {
+  std::string s;
+  for (const auto& e : errors) s += (s.empty() ? "" : "; ") + e;
+  return s;
+}
+
+// Smallest image side on which EdgeDrawing and the descriptors are run (below: no lines).
+constexpr int kMinSideForLines = 16;
+// Smallest image side on which ORB runs (2 x its 31 px edge threshold + 1, and a margin).
+constexpr int kMinSideForOrb = 80;
+
+std::vector<LineSegment> detect_lines(const cv::Mat& gray, const CameraIntrinsics& k,
+                                      const FeatureExtractorOptions& o, cv::Mat& descriptors) {
+  std::vector<LineSegment> out;
+  descriptors = cv::Mat(0, kLbdDims, CV_32F);
+  if (gray.cols < kMinSideForLines || gray.rows < kMinSideForLines) return out;
+  auto ed = cv::ximgproc::createEdgeDrawing();
+  cv::ximgproc::EdgeDrawing::Params p;
+  p.GradientThresholdValue = o.ed_gradient_threshold;
+  p.AnchorThresholdValue = o.ed_anchor_threshold;
+  p.Sigma = static_cast<float>(o.ed_sigma);
+  p.LineFitErrorThreshold = o.ed_line_fit_error_px;
+  const int min_len = std::max(8, static_cast<int>(std::lround(o.min_line_length_frac * gray.cols)));
+  p.MinLineLength = min_len;
+  p.MinPathLength = std::max(10, min_len / 2);
+  ed->setParams(p);
+  ed->detectEdges(gray);
+  std::vector<cv::Vec4f> raw;
+  ed->detectLines(raw);
+
+  std::vector<std::pair<float, cv::Vec4f>> by_len;
+  by_len.reserve(raw.size());
+  for (const auto& l : raw) {
+    const float len = std::hypot(l[2] - l[0], l[3] - l[1]);
+    if (len >= static_cast<float>(min_len)) by_len.emplace_back(len, l);
+  }
+  std::stable_sort(by_len.begin(), by_len.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  if (static_cast<int>(by_len.size()) > o.max_lines) by_len.resize(o.max_lines);
+
+  std::vector<std::pair<cv::Point2f, cv::Point2f>> segs;
+  segs.reserve(by_len.size());
+  out.reserve(by_len.size());
+  for (const auto& [len, l] : by_len) {
+    cv::Point2f p0(l[0], l[1]), p1(l[2], l[3]);
+    orient_segment(gray, p0, p1);
+    LineSegment s;
+    s.p0_px = p0;
+    s.p1_px = p1;
+    s.p0_norm = k.normalize(cv::Point2d(p0));
+    s.p1_norm = k.normalize(cv::Point2d(p1));
+    s.line = rho_theta_from_points(s.p0_norm, s.p1_norm);
+    s.length_px = len;
+    out.push_back(s);
+    segs.emplace_back(p0, p1);
+  }
+  descriptors = compute_band_descriptors(gray, segs, o.lbd_band_width_px, o.lbd_samples_along);
+  return out;
+}
+
+std::vector<cv::Point2f> detect_corners(const cv::Mat& gray, const FeatureExtractorOptions& o) {
+  std::vector<cv::KeyPoint> kps;
+  cv::FAST(gray, kps, o.fast_threshold, true);
+  std::vector<cv::Point2f> out;
+  if (kps.empty()) return out;
+  const int cols = o.corner_grid_cols, rows = o.corner_grid_rows;
+  const int per_cell = std::max(1, (o.max_corners + cols * rows - 1) / (cols * rows));
+  std::vector<std::vector<const cv::KeyPoint*>> cells(static_cast<size_t>(cols * rows));
+  for (const auto& kp : kps) {
+    const int cx = std::min(cols - 1, static_cast<int>(kp.pt.x * cols / gray.cols));
+    const int cy = std::min(rows - 1, static_cast<int>(kp.pt.y * rows / gray.rows));
+    cells[static_cast<size_t>(cy * cols + cx)].push_back(&kp);
+  }
+  std::vector<const cv::KeyPoint*> kept;
+  for (auto& cell : cells) {
+    std::stable_sort(cell.begin(), cell.end(),
+                     [](const cv::KeyPoint* a, const cv::KeyPoint* b) { return a->response > b->response; });
+    for (int i = 0; i < std::min<int>(per_cell, static_cast<int>(cell.size())); ++i) kept.push_back(cell[i]);
+  }
+  std::stable_sort(kept.begin(), kept.end(),
+                   [](const cv::KeyPoint* a, const cv::KeyPoint* b) { return a->response > b->response; });
+  if (static_cast<int>(kept.size()) > o.max_corners) kept.resize(o.max_corners);
+  out.reserve(kept.size());
+  for (const auto* kp : kept) out.push_back(kp->pt);
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> KltOptions::validate() const {
+  std::vector<std::string> e;
+  check_range(e, "klt.window_px", window_px, 5, 101);
+  if (window_px % 2 == 0) e.push_back("klt.window_px = " + std::to_string(window_px) + " must be odd");
+  check_range(e, "klt.max_level", max_level, 0, 6);
+  check_range(e, "klt.max_iterations", max_iterations, 1, 1000);
+  check_range(e, "klt.epsilon", epsilon, 1e-6, 10.0);
+  check_range(e, "klt.min_eig_threshold", min_eig_threshold, 0.0, 1.0);
+  check_range(e, "klt.max_error", max_error, 0.0f, 255.0f);
+  return e;
+}
+
+std::vector<std::string> FeatureExtractorOptions::validate() const {
+  std::vector<std::string> e;
+  check_range(e, "max_lines", max_lines, 0, 100000);
+  check_range(e, "min_line_length_frac", min_line_length_frac, 0.0, 1.0);
+  check_range(e, "ed_gradient_threshold", ed_gradient_threshold, 1, 255);
+  check_range(e, "ed_anchor_threshold", ed_anchor_threshold, 0, 255);
+  check_range(e, "ed_sigma", ed_sigma, 0.1, 10.0);
+  check_range(e, "ed_line_fit_error_px", ed_line_fit_error_px, 0.1, 10.0);
+  check_range(e, "lbd_band_width_px", lbd_band_width_px, 1, 20);
+  check_range(e, "lbd_samples_along", lbd_samples_along, 2, 1000);
+  check_range(e, "fast_threshold", fast_threshold, 1, 255);
+  check_range(e, "max_corners", max_corners, 0, 100000);
+  check_range(e, "corner_grid_cols", corner_grid_cols, 1, 100);
+  check_range(e, "corner_grid_rows", corner_grid_rows, 1, 100);
+  check_range(e, "orb_max_features", orb_max_features, 0, 100000);
+  for (auto& s : klt.validate()) e.push_back(s);
+  return e;
+}
+
+std::vector<cv::Point2d> ImageFeatures::corners_norm() const {
+  std::vector<cv::Point2d> out;
+  out.reserve(corners_px.size());
+  for (const auto& p : corners_px) out.push_back(intrinsics.normalize(cv::Point2d(p)));
+  return out;
+}
+
+void build_klt_pyramid(ImageFeatures& f, const KltOptions& options) {
+  if (f.gray.empty()) throw std::invalid_argument("build_klt_pyramid: the features hold no image");
+  const auto errors = options.validate();
+  if (!errors.empty()) throw std::invalid_argument("build_klt_pyramid: " + join(errors));
+  f.klt_pyramid.clear();
+  cv::buildOpticalFlowPyramid(f.gray, f.klt_pyramid, cv::Size(options.window_px, options.window_px),
+                              options.max_level, true);
+  f.klt_pyramid_options = options;
+}
+
+void release_klt_pyramid(ImageFeatures& f) { f.klt_pyramid.clear(); }
+
+cv::Mat to_gray(const cv::Mat& image) {
+  if (image.empty()) throw std::invalid_argument("to_gray: empty image");
+  if (image.depth() != CV_8U) {
+    throw std::invalid_argument("to_gray: expected an 8-bit image, got depth " +
+                                std::to_string(image.depth()));
+  }
+  cv::Mat gray;
+  switch (image.channels()) {
+    case 1: return image;
+    case 3: cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY); return gray;
+    case 4: cv::cvtColor(image, gray, cv::COLOR_BGRA2GRAY); return gray;
+    default:
+      throw std::invalid_argument("to_gray: unsupported channel count " +
+                                  std::to_string(image.channels()));
+  }
+}
+
+FeatureExtractor::FeatureExtractor(const CameraIntrinsics& camera,
+                                   const FeatureExtractorOptions& options)
+    : camera_(camera), options_(options) {
+  auto errors = options.validate();
+  for (const auto& s : camera.validate()) errors.push_back("camera." + s);
+  if (!errors.empty()) throw std::invalid_argument("FeatureExtractor: " + join(errors));
+}
+
+ImageFeatures FeatureExtractor::extract(const cv::Mat& gray, unsigned parts) const {
+  if (gray.empty()) throw std::invalid_argument("FeatureExtractor::extract: empty image");
+  if (gray.type() != CV_8UC1) {
+    throw std::invalid_argument("FeatureExtractor::extract: expected CV_8UC1 (8-bit grey), got " +
+                                std::to_string(gray.channels()) + " channel(s) of depth " +
+                                std::to_string(gray.depth()) + " (convert with to_gray())");
+  }
+  ImageFeatures f;
+  f.image_size = gray.size();
+  f.intrinsics = (camera_.width_px == gray.cols && camera_.height_px == gray.rows)
+                     ? camera_
+                     : camera_.scaled_to(gray.cols, gray.rows);
+  f.gray = gray;
+  if (parts & kPartLines) f.lines = detect_lines(gray, f.intrinsics, options_, f.line_descriptors);
+  else f.line_descriptors = cv::Mat(0, kLbdDims, CV_32F);
+  if (parts & kPartCorners) f.corners_px = detect_corners(gray, options_);
+  // ORB needs room for its 31 px patches on its pyramid (smaller images: no keypoints).
+  if ((parts & kPartWideBaseline) && options_.orb_max_features > 0 &&
+      std::min(gray.cols, gray.rows) >= kMinSideForOrb) {
+    auto orb = cv::ORB::create(options_.orb_max_features);
+    orb->detectAndCompute(gray, cv::noArray(), f.keypoints, f.keypoint_descriptors);
+  }
+  if (parts & kPartPyramid) build_klt_pyramid(f, options_.klt);
+  return f;
+}
+
+}  // namespace pepper::core::features

@@ -1,0 +1,398 @@
+// Two-view, three-view and wide-baseline verified matching (see matching.hpp).
+#include "core/features/matching.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+#include <opencv2/video/tracking.hpp>
+
+namespace pepper::core::features {
+namespace {
+
+std::string join(const std::vector<std::string>& errors) {
+  std::string s;
+  for (const auto& e : errors) s += (s.empty() ? "" : "; ") + e;
+  return s;
+}
+
+double focal_of(const ImageFeatures& f) { return 0.5 * (f.intrinsics.fx_px + f.intrinsics.fy_px); }
+
+// |theta_a - theta_b| modulo pi, in [0, pi/2].
+double angle_change(double ta, double tb) {
+  double d = std::fmod(std::abs(ta - tb), M_PI);
+  return d > M_PI_2 ? M_PI - d : d;
+}
+
+bool orientation_ok(const LineSegment& a, const LineSegment& b, const LineMatchOptions& o) {
+  if (angle_change(a.line.theta_rad, b.line.theta_rad) > o.max_angle_change_rad) return false;
+  // Planar motion with a horizontal optical axis keeps vertical lines vertical (theta = 0).
+  const double va = std::abs(a.line.theta_rad), vb = std::abs(b.line.theta_rad);
+  if (va < o.vertical_tolerance_rad && vb > o.vertical_mismatch_rad) return false;
+  if (vb < o.vertical_tolerance_rad && va > o.vertical_mismatch_rad) return false;
+  return true;
+}
+
+// Segments of a and b must overlap along b's line between the epipolar lines of a's endpoints.
+bool epipolar_overlap_ok(const LineSegment& a, const LineSegment& b, const cv::Matx33d& E_b_a,
+                         double focal_px) {
+  const cv::Vec3d lb = cv::Vec3d(b.p0_norm.x, b.p0_norm.y, 1.0).cross(cv::Vec3d(b.p1_norm.x, b.p1_norm.y, 1.0));
+  const cv::Point2d db = b.p1_norm - b.p0_norm;
+  const double len_b = std::hypot(db.x, db.y);
+  if (len_b <= 0) return true;
+  const cv::Point2d u = db * (1.0 / len_b);
+  double s[2];
+  const cv::Point2d ends[2] = {a.p0_norm, a.p1_norm};
+  for (int k = 0; k < 2; ++k) {
+    const cv::Vec3d ep = E_b_a * cv::Vec3d(ends[k].x, ends[k].y, 1.0);
+    // Near-parallel epipolar and segment lines (segment through the epipole): no constraint.
+    const double n_ep = std::hypot(ep[0], ep[1]);
+    if (n_ep <= 0) return true;
+    const double sin_angle = std::abs(ep[0] * u.y - ep[1] * u.x) / n_ep;  // |cos(normal, u)|
+    if (sin_angle < std::sin(5.0 * M_PI / 180.0)) return true;
+    const cv::Vec3d q = lb.cross(ep);
+    if (std::abs(q[2]) < 1e-12) return true;
+    const cv::Point2d qp(q[0] / q[2], q[1] / q[2]);
+    s[k] = (qp - b.p0_norm).dot(u);
+  }
+  const double lo = std::min(s[0], s[1]), hi = std::max(s[0], s[1]);
+  const double margin = 0.1 * len_b + 5.0 / focal_px;
+  return hi >= -margin && lo <= len_b + margin;
+}
+
+// Mutual best + ratio on unit-norm float descriptors via one distance matrix.
+std::vector<LineMatch> descriptor_matches(const cv::Mat& da, const cv::Mat& db, const LineMatchOptions& o) {
+  std::vector<LineMatch> out;
+  if (da.empty() || db.empty()) return out;
+  cv::Mat dot;
+  cv::gemm(da, db, 1.0, cv::noArray(), 0.0, dot, cv::GEMM_2_T);  // na x nb, cos similarity
+  const int na = dot.rows, nb = dot.cols;
+  std::vector<int> best_a_for_b(static_cast<size_t>(nb), -1);
+  std::vector<float> best_dot_b(static_cast<size_t>(nb), -std::numeric_limits<float>::infinity());
+  for (int i = 0; i < na; ++i) {
+    const float* r = dot.ptr<float>(i);
+    for (int j = 0; j < nb; ++j) {
+      if (r[j] > best_dot_b[static_cast<size_t>(j)]) {
+        best_dot_b[static_cast<size_t>(j)] = r[j];
+        best_a_for_b[static_cast<size_t>(j)] = i;
+      }
+    }
+  }
+  auto dist = [](float d) { return std::sqrt(std::max(0.0f, 2.0f - 2.0f * d)); };
+  for (int i = 0; i < na; ++i) {
+    const float* r = dot.ptr<float>(i);
+    int j1 = -1;
+    float d1 = -std::numeric_limits<float>::infinity(), d2 = d1;
+    for (int j = 0; j < nb; ++j) {
+      if (r[j] > d1) {
+        d2 = d1;
+        d1 = r[j];
+        j1 = j;
+      } else if (r[j] > d2) {
+        d2 = r[j];
+      }
+    }
+    if (j1 < 0) continue;
+    const float dist1 = dist(d1);
+    if (dist1 > o.max_descriptor_distance) continue;
+    if (nb >= 2 && dist1 > o.ratio * dist(d2)) continue;
+    if (o.mutual && best_a_for_b[static_cast<size_t>(j1)] != i) continue;
+    out.push_back({i, j1, dist1});
+  }
+  return out;
+}
+
+void klt_track(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
+               std::vector<cv::Point2f>& b_pts, std::vector<uchar>& status) {
+  std::vector<float> err;
+  const bool a_pyr = !a.klt_pyramid.empty() && a.klt_pyramid_options.window_px == k.window_px &&
+                     a.klt_pyramid_options.max_level >= k.max_level;
+  const bool b_pyr = !b.klt_pyramid.empty() && b.klt_pyramid_options.window_px == k.window_px &&
+                     b.klt_pyramid_options.max_level >= k.max_level;
+  cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, k.max_iterations, k.epsilon);
+  if (a_pyr && b_pyr) {
+    cv::calcOpticalFlowPyrLK(a.klt_pyramid, b.klt_pyramid, a.corners_px, b_pts, status, err,
+                             cv::Size(k.window_px, k.window_px), k.max_level, crit, 0, k.min_eig_threshold);
+  } else if (b_pyr) {
+    cv::calcOpticalFlowPyrLK(a.gray, b.klt_pyramid, a.corners_px, b_pts, status, err,
+                             cv::Size(k.window_px, k.window_px), k.max_level, crit, 0, k.min_eig_threshold);
+  } else {
+    cv::calcOpticalFlowPyrLK(a.gray, b.gray, a.corners_px, b_pts, status, err,
+                             cv::Size(k.window_px, k.window_px), k.max_level, crit, 0, k.min_eig_threshold);
+  }
+  const float w = static_cast<float>(b.image_size.width), h = static_cast<float>(b.image_size.height);
+  for (size_t i = 0; i < status.size(); ++i) {
+    if (!status[i]) continue;
+    const cv::Point2f& p = b_pts[i];
+    if (!(err[i] <= k.max_error) || !(p.x >= 0 && p.y >= 0 && p.x <= w - 1 && p.y <= h - 1)) status[i] = 0;
+  }
+}
+
+void check_image(const ImageFeatures& f, const char* who) {
+  if (f.gray.empty() || f.image_size.width <= 0) {
+    throw std::invalid_argument(std::string(who) + ": features without image (gray is empty)");
+  }
+}
+
+void verify_points(const ImageFeatures& b, std::vector<PointMatch> cands,
+                   const MatcherOptions& o, TwoViewMatches& r) {
+  r.point_candidates = static_cast<int>(cands.size());
+  std::vector<cv::Point2d> an, bn;
+  an.reserve(cands.size());
+  bn.reserve(cands.size());
+  for (const auto& m : cands) {
+    an.push_back(m.a_norm);
+    bn.push_back(m.b_norm);
+  }
+  const auto ess = geometry::verify_essential(an, bn, focal_of(b), o.essential);
+  r.essential_found = ess.found;
+  r.E_b_a = ess.E_b_a;
+  r.points.reserve(ess.inliers.size());
+  for (int i : ess.inliers) r.points.push_back(cands[static_cast<size_t>(i)]);
+}
+
+void verify_lines(const ImageFeatures& a, const ImageFeatures& b, const MatcherOptions& o,
+                  TwoViewMatches& r) {
+  std::vector<LineMatch> cands = descriptor_matches(a.line_descriptors, b.line_descriptors, o.lines);
+  r.line_candidates = static_cast<int>(cands.size());
+  for (const auto& m : cands) {
+    const LineSegment& la = a.lines[static_cast<size_t>(m.idx_a)];
+    const LineSegment& lb = b.lines[static_cast<size_t>(m.idx_b)];
+    if (!orientation_ok(la, lb, o.lines)) continue;
+    if (o.lines.epipolar_overlap && r.essential_found &&
+        !epipolar_overlap_ok(la, lb, r.E_b_a, focal_of(b)))
+      continue;
+    r.lines.push_back(m);
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> LineMatchOptions::validate() const {
+  std::vector<std::string> e;
+  auto bad = [&](const char* name, double v, const char* range) {
+    std::ostringstream os;
+    os << "lines." << name << " = " << v << " must be in " << range;
+    e.push_back(os.str());
+  };
+  if (!(ratio > 0.0 && ratio <= 1.0)) bad("ratio", ratio, "(0, 1]");
+  if (!(max_descriptor_distance > 0.0 && max_descriptor_distance <= 2.0))
+    bad("max_descriptor_distance", max_descriptor_distance, "(0, 2]");
+  if (!(max_angle_change_rad > 0.0 && max_angle_change_rad <= M_PI_2))
+    bad("max_angle_change_rad", max_angle_change_rad, "(0, pi/2]");
+  if (!(vertical_tolerance_rad >= 0.0 && vertical_tolerance_rad < M_PI_2))
+    bad("vertical_tolerance_rad", vertical_tolerance_rad, "[0, pi/2)");
+  if (!(vertical_mismatch_rad >= vertical_tolerance_rad && vertical_mismatch_rad <= M_PI_2))
+    bad("vertical_mismatch_rad", vertical_mismatch_rad, "[vertical_tolerance_rad, pi/2]");
+  return e;
+}
+
+std::vector<std::string> MatcherOptions::validate() const {
+  std::vector<std::string> e = lines.validate();
+  for (auto& s : klt.validate()) e.push_back(s);
+  for (auto& s : essential.validate()) e.push_back(s);
+  for (auto& s : trifocal.validate()) e.push_back(s);
+  if (!(three_view_point_radius_px > 0.0 && three_view_point_radius_px <= 50.0))
+    e.push_back("three_view_point_radius_px = " + std::to_string(three_view_point_radius_px) +
+                " must be in (0, 50]");
+  if (!(orb_ratio > 0.0 && orb_ratio <= 1.0))
+    e.push_back("orb_ratio = " + std::to_string(orb_ratio) + " must be in (0, 1]");
+  if (!(orb_max_hamming >= 0 && orb_max_hamming <= 256))
+    e.push_back("orb_max_hamming = " + std::to_string(orb_max_hamming) + " must be in [0, 256]");
+  return e;
+}
+
+std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& b,
+                                   const LineMatchOptions& options) {
+  const auto errors = options.validate();
+  if (!errors.empty()) throw std::invalid_argument("match_lines: " + join(errors));
+  std::vector<LineMatch> out;
+  for (const auto& m : descriptor_matches(a.line_descriptors, b.line_descriptors, options)) {
+    if (orientation_ok(a.lines[static_cast<size_t>(m.idx_a)], b.lines[static_cast<size_t>(m.idx_b)], options))
+      out.push_back(m);
+  }
+  return out;
+}
+
+TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
+                              const MatcherOptions& options) {
+  const auto errors = options.validate();
+  if (!errors.empty()) throw std::invalid_argument("match_two_view: " + join(errors));
+  check_image(a, "match_two_view (a)");
+  check_image(b, "match_two_view (b)");
+  TwoViewMatches r;
+  if (!a.corners_px.empty()) {
+    std::vector<cv::Point2f> b_pts;
+    std::vector<uchar> status;
+    klt_track(a, b, options.klt, b_pts, status);
+    std::vector<PointMatch> cands;
+    cands.reserve(status.size());
+    for (size_t i = 0; i < status.size(); ++i) {
+      if (!status[i]) continue;
+      PointMatch m;
+      m.idx_a = static_cast<int>(i);
+      m.a_px = a.corners_px[i];
+      m.b_px = b_pts[i];
+      m.a_norm = a.intrinsics.normalize(cv::Point2d(m.a_px));
+      m.b_norm = b.intrinsics.normalize(cv::Point2d(m.b_px));
+      cands.push_back(m);
+    }
+    verify_points(b, std::move(cands), options, r);
+  }
+  verify_lines(a, b, options, r);
+  return r;
+}
+
+TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& b,
+                                   const MatcherOptions& options) {
+  const auto errors = options.validate();
+  if (!errors.empty()) throw std::invalid_argument("match_wide_baseline: " + join(errors));
+  TwoViewMatches r;
+  std::vector<PointMatch> cands;
+  if (!a.keypoint_descriptors.empty() && !b.keypoint_descriptors.empty()) {
+    const cv::Mat& da = a.keypoint_descriptors;
+    const cv::Mat& db = b.keypoint_descriptors;
+    const int na = da.rows, nb = db.rows;
+    std::vector<int> dist(static_cast<size_t>(na) * nb);
+    for (int i = 0; i < na; ++i)
+      for (int j = 0; j < nb; ++j)
+        dist[static_cast<size_t>(i) * nb + j] = static_cast<int>(cv::norm(da.row(i), db.row(j), cv::NORM_HAMMING));
+    std::vector<int> best_a_for_b(static_cast<size_t>(nb), -1), best_d_b(static_cast<size_t>(nb), 1 << 20);
+    for (int i = 0; i < na; ++i)
+      for (int j = 0; j < nb; ++j) {
+        const int d = dist[static_cast<size_t>(i) * nb + j];
+        if (d < best_d_b[static_cast<size_t>(j)]) {
+          best_d_b[static_cast<size_t>(j)] = d;
+          best_a_for_b[static_cast<size_t>(j)] = i;
+        }
+      }
+    for (int i = 0; i < na; ++i) {
+      int j1 = -1, d1 = 1 << 20, d2 = 1 << 20;
+      for (int j = 0; j < nb; ++j) {
+        const int d = dist[static_cast<size_t>(i) * nb + j];
+        if (d < d1) {
+          d2 = d1;
+          d1 = d;
+          j1 = j;
+        } else if (d < d2) {
+          d2 = d;
+        }
+      }
+      if (j1 < 0 || d1 > options.orb_max_hamming) continue;
+      if (nb >= 2 && d1 > options.orb_ratio * d2) continue;
+      if (best_a_for_b[static_cast<size_t>(j1)] != i) continue;
+      PointMatch m;
+      m.idx_a = i;
+      m.idx_b = j1;
+      m.a_px = a.keypoints[static_cast<size_t>(i)].pt;
+      m.b_px = b.keypoints[static_cast<size_t>(j1)].pt;
+      m.a_norm = a.intrinsics.normalize(cv::Point2d(m.a_px));
+      m.b_norm = b.intrinsics.normalize(cv::Point2d(m.b_px));
+      cands.push_back(m);
+    }
+  }
+  verify_points(b, std::move(cands), options, r);
+  verify_lines(a, b, options, r);
+  return r;
+}
+
+ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches& x_to_hub,
+                                   const ImageFeatures& hub, const ImageFeatures& y,
+                                   const TwoViewMatches& y_to_hub, const MatcherOptions& options) {
+  ThreeViewMatches r;
+  // Lines: chain through the hub's line index.
+  std::vector<int> x_of_hub(hub.lines.size(), -1);
+  for (const auto& m : x_to_hub.lines) x_of_hub[static_cast<size_t>(m.idx_b)] = m.idx_a;
+  std::vector<geometry::LineTriplet> triplets;
+  std::vector<LineTripletMatch> cand;
+  for (const auto& m : y_to_hub.lines) {
+    const int xi = x_of_hub[static_cast<size_t>(m.idx_b)];
+    if (xi < 0) continue;
+    const LineSegment& lh = hub.lines[static_cast<size_t>(m.idx_b)];
+    const LineSegment& lx = x.lines[static_cast<size_t>(xi)];
+    const LineSegment& ly = y.lines[static_cast<size_t>(m.idx_a)];
+    geometry::LineTriplet t;
+    t.view[0] = {lh.p0_norm, lh.p1_norm};
+    t.view[1] = {lx.p0_norm, lx.p1_norm};
+    t.view[2] = {ly.p0_norm, ly.p1_norm};
+    triplets.push_back(t);
+    cand.push_back({xi, m.idx_b, m.idx_a});
+  }
+  r.line_candidates = static_cast<int>(cand.size());
+  r.trifocal = geometry::verify_line_triplets(triplets, focal_of(hub), options.trifocal);
+  for (int i : r.trifocal.inliers) r.lines.push_back(cand[static_cast<size_t>(i)]);
+
+  // Points: verified tracks X -> hub and Y -> hub meeting in the hub (mutual nearest).
+  const auto& px = x_to_hub.points;
+  const auto& py = y_to_hub.points;
+  const double r2 = options.three_view_point_radius_px * options.three_view_point_radius_px;
+  std::vector<int> nn_x(px.size(), -1), nn_y(py.size(), -1);
+  std::vector<double> d_x(px.size(), r2), d_y(py.size(), r2);
+  for (size_t i = 0; i < px.size(); ++i) {
+    for (size_t j = 0; j < py.size(); ++j) {
+      const double dx = px[i].b_px.x - py[j].b_px.x, dy = px[i].b_px.y - py[j].b_px.y;
+      const double d = dx * dx + dy * dy;
+      if (d <= d_x[i]) {
+        d_x[i] = d;
+        nn_x[i] = static_cast<int>(j);
+      }
+      if (d <= d_y[j]) {
+        d_y[j] = d;
+        nn_y[j] = static_cast<int>(i);
+      }
+    }
+  }
+  for (size_t i = 0; i < px.size(); ++i) {
+    const int j = nn_x[i];
+    if (j < 0 || nn_y[static_cast<size_t>(j)] != static_cast<int>(i)) continue;
+    PointTripletMatch m;
+    m.idx_x = px[i].idx_a;
+    m.idx_y = py[static_cast<size_t>(j)].idx_a;
+    m.hub_px = 0.5f * (px[i].b_px + py[static_cast<size_t>(j)].b_px);
+    m.hub_norm = hub.intrinsics.normalize(cv::Point2d(m.hub_px));
+    r.points.push_back(m);
+  }
+  return r;
+}
+
+size_t FrameMatcher::PairHash::operator()(const std::pair<int64_t, int64_t>& p) const noexcept {
+  return std::hash<int64_t>()(p.first) * 1000003u ^ std::hash<int64_t>()(p.second);
+}
+
+FrameMatcher::FrameMatcher(ImageFeatures current, const MatcherOptions& options)
+    : current_(std::move(current)), options_(options) {
+  const auto errors = options_.validate();
+  if (!errors.empty()) throw std::invalid_argument("FrameMatcher: " + join(errors));
+  check_image(current_, "FrameMatcher (current)");
+  const bool ok = !current_.klt_pyramid.empty() &&
+                  current_.klt_pyramid_options.window_px == options_.klt.window_px &&
+                  current_.klt_pyramid_options.max_level >= options_.klt.max_level;
+  if (!ok) build_klt_pyramid(current_, options_.klt);
+}
+
+const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures& key) {
+  auto it = two_view_.find(key_id);
+  if (it != two_view_.end()) return it->second;
+  return two_view_.emplace(key_id, match_two_view(key, current_, options_)).first->second;
+}
+
+const ThreeViewMatches& FrameMatcher::three_view(int64_t x_id, const ImageFeatures& x, int64_t y_id,
+                                                 const ImageFeatures& y) {
+  const auto key = std::make_pair(x_id, y_id);
+  auto it = three_view_.find(key);
+  if (it != three_view_.end()) return it->second;
+  const TwoViewMatches& xm = two_view(x_id, x);
+  const TwoViewMatches& ym = two_view(y_id, y);
+  return three_view_.emplace(key, verify_three_view(x, xm, current_, y, ym, options_)).first->second;
+}
+
+const TwoViewMatches& FrameMatcher::wide_baseline(int64_t key_id, const ImageFeatures& key) {
+  auto it = wide_.find(key_id);
+  if (it != wide_.end()) return it->second;
+  return wide_.emplace(key_id, match_wide_baseline(key, current_, options_)).first->second;
+}
+
+}  // namespace pepper::core::features

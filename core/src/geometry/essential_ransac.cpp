@@ -1,0 +1,161 @@
+// Five-point essential RANSAC on normalised coordinates (see essential_ransac.hpp).
+#include "core/geometry/essential_ransac.hpp"
+
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+// The core runs single-threaded (ARCHITECTURE.md): no OpenMP inside Eigen products.
+#ifndef EIGEN_DONT_PARALLELIZE
+#define EIGEN_DONT_PARALLELIZE
+#endif
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+
+namespace pepper::core::geometry {
+namespace {
+
+// Squared Sampson distance of a correspondence to E (normalised units).
+double sampson2(const Eigen::Matrix3d& E, const cv::Point2d& a, const cv::Point2d& b) {
+  const Eigen::Vector3d xa(a.x, a.y, 1.0), xb(b.x, b.y, 1.0);
+  const Eigen::Vector3d Ea = E * xa, Etb = E.transpose() * xb;
+  const double num = xb.dot(Ea);
+  const double den = Ea(0) * Ea(0) + Ea(1) * Ea(1) + Etb(0) * Etb(0) + Etb(1) * Etb(1);
+  return den > 0 ? num * num / den : std::numeric_limits<double>::infinity();
+}
+
+// Linear (eight-point) E from many inliers, projected onto the essential manifold.
+bool fit_linear(const std::vector<cv::Point2d>& a, const std::vector<cv::Point2d>& b,
+                const std::vector<int>& idx, Eigen::Matrix3d& E) {
+  if (idx.size() < 8) return false;
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(idx.size()), 9);
+  for (size_t r = 0; r < idx.size(); ++r) {
+    const cv::Point2d& p = a[static_cast<size_t>(idx[r])];
+    const cv::Point2d& q = b[static_cast<size_t>(idx[r])];
+    A.row(static_cast<Eigen::Index>(r)) << q.x * p.x, q.x * p.y, q.x, q.y * p.x, q.y * p.y, q.y, p.x, p.y, 1.0;
+  }
+  const Eigen::Matrix<double, 9, 9> AtA = A.transpose() * A;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(AtA);
+  const Eigen::Matrix<double, 9, 1> e = es.eigenvectors().col(0);
+  Eigen::Matrix3d F;
+  F << e(0), e(1), e(2), e(3), e(4), e(5), e(6), e(7), e(8);
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  E = svd.matrixU() * Eigen::Vector3d(1.0, 1.0, 0.0).asDiagonal() * svd.matrixV().transpose();
+  return E.allFinite();
+}
+
+// Points of `idx` in front of both cameras for the best of the four decompositions of E.
+std::vector<int> in_front(const Eigen::Matrix3d& E, const std::vector<cv::Point2d>& a,
+                          const std::vector<cv::Point2d>& b, const std::vector<int>& idx) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+  if (U.determinant() < 0) U = -U;
+  if (V.determinant() < 0) V = -V;
+  Eigen::Matrix3d W;
+  W << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  const Eigen::Matrix3d Rs[2] = {U * W * V.transpose(), U * W.transpose() * V.transpose()};
+  const Eigen::Vector3d u3 = U.col(2);
+  std::vector<int> best;
+  for (const auto& R : Rs) {
+    for (double sgn : {1.0, -1.0}) {
+      const Eigen::Vector3d t = sgn * u3;
+      std::vector<int> ok;
+      for (int i : idx) {
+        const Eigen::Vector3d xa(a[static_cast<size_t>(i)].x, a[static_cast<size_t>(i)].y, 1.0);
+        const Eigen::Vector3d xb(b[static_cast<size_t>(i)].x, b[static_cast<size_t>(i)].y, 1.0);
+        // lambda_b xb = lambda_a R xa + t
+        const Eigen::Vector3d Rxa = R * xa;
+        const Eigen::Vector3d c = xb.cross(Rxa);
+        const double c2 = c.squaredNorm();
+        if (c2 < 1e-18) continue;
+        const double la = -xb.cross(t).dot(c) / c2;
+        const double lb = la * Rxa.z() + t.z();
+        if (la > 0 && lb > 0) ok.push_back(i);
+      }
+      if (ok.size() > best.size()) best = std::move(ok);
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::vector<std::string> EssentialRansacOptions::validate() const {
+  std::vector<std::string> e;
+  auto bad = [&](const char* name, double v, const char* range) {
+    std::ostringstream os;
+    os << "essential." << name << " = " << v << " must be in " << range;
+    e.push_back(os.str());
+  };
+  if (!(threshold_px > 0.0 && threshold_px <= 100.0)) bad("threshold_px", threshold_px, "(0, 100]");
+  if (!(confidence > 0.0 && confidence < 1.0)) bad("confidence", confidence, "(0, 1)");
+  if (!(max_iterations >= 1 && max_iterations <= 100000)) bad("max_iterations", max_iterations, "[1, 100000]");
+  if (!(min_inliers >= 5)) bad("min_inliers", min_inliers, "[5, inf)");
+  return e;
+}
+
+EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
+                                 const std::vector<cv::Point2d>& b_norm, double focal_px,
+                                 const EssentialRansacOptions& options) {
+  if (a_norm.size() != b_norm.size()) {
+    throw std::invalid_argument("verify_essential: " + std::to_string(a_norm.size()) + " points in a, " +
+                                std::to_string(b_norm.size()) + " in b");
+  }
+  if (!(focal_px > 0.0)) throw std::invalid_argument("verify_essential: focal_px must be > 0");
+  const auto errors = options.validate();
+  if (!errors.empty()) throw std::invalid_argument("verify_essential: " + errors.front());
+
+  EssentialResult r;
+  const int n = static_cast<int>(a_norm.size());
+  if (n < std::max(5, options.min_inliers)) return r;
+  cv::Mat mask;
+  cv::Mat E;
+  try {
+    E = cv::findEssentialMat(a_norm, b_norm, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC,
+                             options.confidence, options.threshold_px / focal_px,
+                             options.max_iterations, mask);
+  } catch (const cv::Exception&) {
+    return r;  // degenerate configuration (e.g. all points identical): no model
+  }
+  if (E.empty() || E.rows < 3 || mask.empty()) return r;
+  // Local optimisation: OpenCV keeps the best minimal-sample model; refit linearly on its inliers
+  // (Sampson distance within the threshold) and reclassify, while the inlier count grows.
+  Eigen::Matrix3d Em;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) Em(i, j) = E.at<double>(i, j);
+  const double thr2 = (options.threshold_px / focal_px) * (options.threshold_px / focal_px);
+  auto classify = [&](const Eigen::Matrix3d& M) {
+    std::vector<int> idx;
+    for (int i = 0; i < n; ++i)
+      if (sampson2(M, a_norm[static_cast<size_t>(i)], b_norm[static_cast<size_t>(i)]) <= thr2) idx.push_back(i);
+    return idx;
+  };
+  std::vector<int> inl = classify(Em);
+  for (int round = 0; round < 3; ++round) {
+    Eigen::Matrix3d Er;
+    if (!fit_linear(a_norm, b_norm, inl, Er)) break;
+    std::vector<int> inl2 = classify(Er);
+    if (inl2.size() <= inl.size()) break;
+    inl = std::move(inl2);
+    Em = Er;
+  }
+  // Cheirality: of the four (R, t) decompositions of E, take the one with the most points in
+  // front of both cameras and keep those points.
+  if (static_cast<int>(inl.size()) >= options.min_inliers) {
+    std::vector<int> kept = in_front(Em, a_norm, b_norm, inl);
+    // With little translation (near pure rotation) depths are noise and about half the true
+    // matches fail: apply the test only when it keeps a clear majority.
+    if (kept.size() >= 0.8 * static_cast<double>(inl.size())) inl = std::move(kept);
+  }
+  r.inliers = std::move(inl);
+  if (static_cast<int>(r.inliers.size()) < options.min_inliers) {
+    r.inliers.clear();
+    return r;
+  }
+  r.found = true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r.E_b_a(i, j) = Em(i, j);
+  return r;
+}
+
+}  // namespace pepper::core::geometry

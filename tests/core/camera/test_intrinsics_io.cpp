@@ -1,0 +1,116 @@
+// Intrinsics files: ViSP camera XML (shipped file and files written here), YAML and JSON.
+#include "core/camera/intrinsics_io.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+namespace pepper::core::camera {
+namespace {
+
+const std::string kXml = std::string(PEPPER_SOURCE_DIR) + "/tests/core/camera/data/pepper_top_qvga.xml";
+
+std::string temp_file(const std::string& name, const std::string& content) {
+  const auto dir = std::filesystem::temp_directory_path() / "pepper_intrinsics_io_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / name).string();
+  std::ofstream(path) << content;
+  return path;
+}
+
+TEST(IntrinsicsIo, VispXmlFirstCameraWithoutDistortion) {
+  const CameraIntrinsics k = load_visp_camera_xml(kXml);
+  EXPECT_EQ(k.width_px, 320);
+  EXPECT_EQ(k.height_px, 240);
+  EXPECT_DOUBLE_EQ(k.fx_px, 298.13);  // the distortion model of the same camera is skipped
+  EXPECT_DOUBLE_EQ(k.fy_px, 298.72);
+  EXPECT_DOUBLE_EQ(k.cx_px, 159.15);
+  EXPECT_DOUBLE_EQ(k.cy_px, 118.91);
+  // Normalisation by hand: ((100 - 159.15) / 298.13, (50 - 118.91) / 298.72).
+  const cv::Point2d n = k.normalize({100.0, 50.0});
+  EXPECT_NEAR(n.x, -0.198403381, 1e-9);
+  EXPECT_NEAR(n.y, -0.230684253, 1e-9);
+}
+
+TEST(IntrinsicsIo, VispXmlSelectsBySizeAndName) {
+  const CameraIntrinsics vga = load_visp_camera_xml(kXml, "Camera", 640, 480);
+  EXPECT_DOUBLE_EQ(vga.fx_px, 596.26);
+  EXPECT_DOUBLE_EQ(vga.cy_px, 238.32);
+  EXPECT_EQ(vga, CameraIntrinsics::pepper_top_vga());
+  const CameraIntrinsics bottom = load_visp_camera_xml(kXml, "bottom");
+  EXPECT_DOUBLE_EQ(bottom.fx_px, 280.0);
+  EXPECT_DOUBLE_EQ(bottom.cx_px, 160.5);
+}
+
+TEST(IntrinsicsIo, DispatchOnExtension) { EXPECT_EQ(load_intrinsics(kXml), load_visp_camera_xml(kXml)); }
+
+TEST(IntrinsicsIo, ErrorsNameTheFile) {
+  const std::string missing = "/nonexistent/dir/camera.xml";
+  try {
+    load_intrinsics(missing);
+    FAIL() << "expected IntrinsicsFileError";
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos);
+    EXPECT_EQ(e.path(), missing);
+  }
+  const std::string corrupt = temp_file("corrupt.xml", "<root><camera><name>x</name>");
+  EXPECT_THROW(load_visp_camera_xml(corrupt), IntrinsicsFileError);
+  try {
+    load_visp_camera_xml(kXml, "nosuchcamera");
+    FAIL();
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("nosuchcamera"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find(kXml), std::string::npos);
+  }
+  EXPECT_THROW(load_visp_camera_xml(kXml, "", 1024, 768), IntrinsicsFileError);
+  const std::string bad_number = temp_file(
+      "bad_number.xml",
+      "<root><camera><name>c</name><image_width>320</image_width><image_height>240</image_height>"
+      "<model><type>perspectiveProjWithoutDistortion</type><px>abc</px><py>1</py><u0>1</u0>"
+      "<v0>1</v0></model></camera></root>");
+  try {
+    load_visp_camera_xml(bad_number);
+    FAIL();
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("px"), std::string::npos);
+  }
+  const std::string negative = temp_file(
+      "negative.xml",
+      "<root><camera><name>c</name><image_width>320</image_width><image_height>240</image_height>"
+      "<model><type>perspectiveProjWithoutDistortion</type><px>-5</px><py>1</py><u0>1</u0>"
+      "<v0>1</v0></model></camera></root>");
+  try {
+    load_visp_camera_xml(negative);
+    FAIL();
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("fx_px"), std::string::npos);
+  }
+}
+
+TEST(IntrinsicsIo, YamlAndJsonRoundTrip) {
+  const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
+  for (const char* name : {"k.yaml", "k.json"}) {
+    const std::string path = temp_file(name, "");
+    save_intrinsics_plain(k, path);
+    EXPECT_EQ(load_intrinsics(path), k) << name;
+  }
+}
+
+TEST(IntrinsicsIo, PlainFormsByHand) {
+  const std::string yaml = temp_file(
+      "hand.yaml", "width_px: 320\nheight_px: 240\nfx_px: 300\nfy_px: 301\ncx_px: 160\ncy_px: 120\n");
+  const CameraIntrinsics k = load_intrinsics(yaml);
+  EXPECT_EQ(k.width_px, 320);
+  EXPECT_DOUBLE_EQ(k.fy_px, 301.0);
+  const std::string json = temp_file("hand.json", R"({"width_px": 320, "height_px": 240, "fx_px": 300,
+      "fy_px": 301, "cx_px": 160, "cy_px": 120})");
+  EXPECT_EQ(load_intrinsics(json), k);
+  EXPECT_THROW(load_intrinsics(temp_file("missing_key.yaml", "width_px: 320\n")), IntrinsicsFileError);
+  EXPECT_THROW(load_intrinsics(temp_file("broken.json", "{ not json")), IntrinsicsFileError);
+  EXPECT_THROW(load_intrinsics(temp_file("k.txt", "")), IntrinsicsFileError);
+}
+
+}  // namespace
+}  // namespace pepper::core::camera

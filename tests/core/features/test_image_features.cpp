@@ -1,0 +1,144 @@
+// Feature extraction: bad input, any size, textureless images, a drawn scene with known lines.
+#include "core/features/image_features.hpp"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "core/features/matching.hpp"
+
+namespace pepper::core::features {
+namespace {
+
+// A grey image with a few filled rectangles and a textured patch (deterministic).
+cv::Mat drawn_scene(int w, int h, int dx_px = 0) {
+  cv::Mat img(h, w, CV_8UC1, cv::Scalar(90));
+  const double s = w / 640.0;
+  auto R = [&](double x, double y, double rw, double rh, int grey) {
+    cv::rectangle(img, cv::Rect(cv::Point(static_cast<int>(x * s) + dx_px, static_cast<int>(y * s)),
+                                cv::Size(static_cast<int>(rw * s), static_cast<int>(rh * s))),
+                  cv::Scalar(grey), cv::FILLED);
+  };
+  R(60, 60, 160, 300, 200);
+  R(300, 100, 80, 250, 30);
+  R(430, 40, 150, 120, 170);
+  R(420, 300, 180, 120, 230);
+  cv::RNG rng(7);
+  // Small squares: FAST corners for KLT.
+  for (int i = 0; i < 80; ++i) {
+    const cv::Point c(static_cast<int>(rng.uniform(0.05, 0.9) * w) + dx_px, static_cast<int>(rng.uniform(0.05, 0.9) * h));
+    const int side = std::max(3, static_cast<int>(rng.uniform(6, 14) * s));
+    cv::rectangle(img, cv::Rect(c, cv::Size(side, side)), cv::Scalar(rng.uniform(0, 2) ? 10 : 250), cv::FILLED);
+  }
+  // A camera's blur (FAST finds few corners on perfectly crisp squares).
+  cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
+  return img;
+}
+
+TEST(FeatureExtractor, RejectsEmptyAndNonGreyImages) {
+  const FeatureExtractor ex;
+  EXPECT_THROW(ex.extract(cv::Mat()), std::invalid_argument);
+  EXPECT_THROW(ex.extract(cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3))), std::invalid_argument);
+  EXPECT_THROW(ex.extract(cv::Mat(48, 64, CV_32FC1, cv::Scalar(1))), std::invalid_argument);
+  try {
+    ex.extract(cv::Mat(48, 64, CV_8UC3));
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("CV_8UC1"), std::string::npos);
+  }
+}
+
+TEST(FeatureExtractor, InvalidOptionsNameTheField) {
+  FeatureExtractorOptions o;
+  o.max_lines = -1;
+  o.klt.window_px = 4;
+  try {
+    FeatureExtractor ex(CameraIntrinsics::pepper_top_vga(), o);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_lines"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("klt.window_px"), std::string::npos);
+  }
+}
+
+TEST(FeatureExtractor, TexturelessImagesGiveEmptyFeaturesAndZeroCounts) {
+  const FeatureExtractor ex;
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(1, 1), cv::Size(7, 3), cv::Size(33, 500)}) {
+    const cv::Mat flat(size, CV_8UC1, cv::Scalar(128));
+    const ImageFeatures f = ex.extract(flat);
+    EXPECT_TRUE(f.lines.empty()) << size;
+    EXPECT_TRUE(f.corners_px.empty()) << size;
+    EXPECT_TRUE(f.keypoints.empty()) << size;
+    EXPECT_EQ(f.line_descriptors.rows, 0);
+    const TwoViewMatches m = match_two_view(f, f);
+    EXPECT_EQ(m.total(), 0);
+    FrameMatcher fm(f);
+    EXPECT_EQ(fm.three_view(1, f, 2, f).total(), 0);
+    EXPECT_EQ(fm.wide_baseline(1, f).total(), 0);
+  }
+}
+
+TEST(FeatureExtractor, AnySizeWorksAndIntrinsicsAreScaled) {
+  const FeatureExtractor ex;
+  for (const cv::Size size : {cv::Size(320, 240), cv::Size(640, 480), cv::Size(800, 300), cv::Size(64, 64)}) {
+    const ImageFeatures f = ex.extract(drawn_scene(size.width, size.height));
+    EXPECT_EQ(f.image_size, size);
+    EXPECT_EQ(f.intrinsics.width_px, size.width);
+    EXPECT_EQ(f.line_descriptors.rows, static_cast<int>(f.lines.size()));
+    EXPECT_EQ(f.keypoint_descriptors.rows, static_cast<int>(f.keypoints.size()));
+    if (size.width >= 320) {
+      EXPECT_GE(f.lines.size(), 8u) << size;
+      EXPECT_GE(f.corners_px.size(), 20u) << size;
+    }
+    for (const auto& l : f.lines) {
+      // Stored normalised endpoints and (rho, theta) agree with the pixel endpoints.
+      const cv::Point2d p0 = f.intrinsics.normalize(cv::Point2d(l.p0_px));
+      EXPECT_NEAR(p0.x, l.p0_norm.x, 1e-9);
+      EXPECT_NEAR(p0.x * std::cos(l.line.theta_rad) + p0.y * std::sin(l.line.theta_rad), l.line.rho, 1e-6);
+      EXPECT_GT(l.line.theta_rad, -M_PI_2);
+      EXPECT_LE(l.line.theta_rad, M_PI_2);
+    }
+  }
+  EXPECT_EQ(ex.extract(drawn_scene(320, 240)).intrinsics, CameraIntrinsics::pepper_top_vga().scaled_to(320, 240));
+}
+
+TEST(FeatureExtractor, FindsTheDrawnVerticalEdges) {
+  const ImageFeatures f = FeatureExtractor().extract(drawn_scene(640, 480));
+  // Left edge of the first rectangle: x = 60 (the edge lies between 59 and 60), y 60..360.
+  bool found = false;
+  for (const auto& l : f.lines) {
+    const bool vertical = std::abs(l.line.theta_rad) < 0.02;
+    if (vertical && std::abs(l.p0_px.x - 59.5) < 1.5 && l.length_px > 100) found = true;
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST(FeatureExtractor, PartsSelectWhatIsComputed) {
+  const FeatureExtractor ex;
+  const ImageFeatures f = ex.extract(drawn_scene(640, 480), kPartsCurrentFrame);
+  EXPECT_FALSE(f.lines.empty());
+  EXPECT_TRUE(f.corners_px.empty());
+  EXPECT_TRUE(f.keypoints.empty());
+  EXPECT_FALSE(f.klt_pyramid.empty());
+}
+
+TEST(Matching, ShiftedImageMatchesLinesAndPoints) {
+  const FeatureExtractor ex;
+  const ImageFeatures a = ex.extract(drawn_scene(640, 480));
+  const ImageFeatures b = ex.extract(drawn_scene(640, 480, 6));
+  const TwoViewMatches m = match_two_view(a, b);
+  EXPECT_GE(m.n_lines(), 6);
+  EXPECT_GE(m.n_points(), 20);
+  for (const auto& p : m.points) EXPECT_NEAR(p.b_px.x - p.a_px.x, 6.0, 1.0);
+  for (const auto& l : m.lines) {
+    EXPECT_NEAR(std::cos(a.lines[l.idx_a].line.theta_rad), std::cos(b.lines[l.idx_b].line.theta_rad), 0.05);
+  }
+  FrameMatcher fm(b);
+  const TwoViewMatches& first = fm.two_view(7, a);
+  const TwoViewMatches& again = fm.two_view(7, a);
+  EXPECT_EQ(&first, &again);  // cached: computed once per frame
+  EXPECT_EQ(first.total(), m.total());
+}
+
+}  // namespace
+}  // namespace pepper::core::features
