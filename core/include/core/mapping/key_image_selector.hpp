@@ -1,0 +1,63 @@
+#pragma once
+// Key-image selection of the teach phase (METHOD.md "Teach: key-image selection"), as a state
+// machine over counts so it can be driven by a synthetic count model in tests; the Teacher
+// (teacher.hpp) feeds it counts computed from images.
+//
+// Frames are numbered 0, 1, 2, ... Frame 0 is the first key image. For each new frame c >= 1
+// the caller computes, against the current key image k = key():
+//     count = nL(Ik, Ic-1, Ic) + nP(Ik, Ic)
+// and calls on_frame(c, count). When count < epsilon (and c-1 is at least min_frame_gap frames
+// after the key image), frame c-1 becomes the new key image
+// (tracking restarts from it at frame c+1). Special case: if c-1 is the key image itself (the
+// scene changed completely within one frame), frame c becomes the key image instead, so the
+// tour is never left without a reference. finish(last) marks the last frame as the final key
+// image (unless it already is the key image).
+//
+// Key-image indices strictly increase. Not thread-safe. Invalid options or frame numbers that
+// do not increase by one throw std::invalid_argument.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pepper::core::mapping {
+
+struct KeyImageSelectorOptions {
+  /// epsilon of METHOD.md: verified lines (three views) + points (two views) below which a new
+  /// key image is taken. >= 1. Default 100 from real Pepper images (docs/method/teach.md):
+  /// neighbouring key images of a working QVGA map share 90..146 verified matches (medians).
+  int epsilon = 100;
+  /// Minimum frame gap between a key image and the next (not in the paper; >= 1, 1 = paper).
+  /// Replay needs `consecutive_frames` (2) frames per switch, so key images closer than about
+  /// three frames cannot be switched through in time and the robot lags in turns
+  /// (docs/method/teach.md). A count below epsilon earlier than this is ignored.
+  int min_frame_gap = 3;
+  std::vector<std::string> validate() const;
+};
+
+class KeyImageSelector {
+ public:
+  explicit KeyImageSelector(const KeyImageSelectorOptions& options = {});
+
+  /// The current key image's frame number (frame 0 after construction).
+  int64_t key() const { return key_; }
+  /// Frame c (must be previous + 1, starting at 1) with its count against key(). Returns the
+  /// frame number of a new key image when one is taken.
+  std::optional<int64_t> on_frame(int64_t c, int count);
+  /// End of the sequence at frame `last` (the last frame passed to on_frame, or 0). Returns the
+  /// final key image's frame number when it is new.
+  std::optional<int64_t> finish();
+
+  /// All key image frame numbers so far, increasing.
+  const std::vector<int64_t>& key_images() const { return keys_; }
+
+ private:
+  KeyImageSelectorOptions options_;
+  int64_t key_ = 0;
+  int64_t last_ = 0;
+  bool finished_ = false;
+  std::vector<int64_t> keys_{0};
+};
+
+}  // namespace pepper::core::mapping

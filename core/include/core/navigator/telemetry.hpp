@@ -1,0 +1,73 @@
+#pragma once
+// The navigator's outputs: the command for the base and one telemetry record per frame.
+// Plain data (no behaviour) so the app, the UI and recorders can copy and serialise it.
+// Units in names; NaN marks a value that was not computed this frame; -1 marks an absent
+// key-image index. Timings are wall-clock durations (telemetry only, never used by the command).
+
+#include <cstdint>
+#include <limits>
+
+namespace pepper::core::navigator {
+
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+enum class NavState { kNotLocalized, kNavigating, kHolding, kLost, kTourComplete };
+enum class StopReason {
+  kNone,          ///< moving (not a stop)
+  kNotLocalized,  ///< initial localisation has not succeeded yet
+  kFeaturesLost,  ///< no usable feature for longer than the hold time
+  kTourComplete,  ///< the final image was reached
+};
+
+const char* to_string(NavState s);
+const char* to_string(StopReason r);
+
+struct Command {
+  double v_m_s = 0.0;        ///< forward speed, base x
+  double omega_rad_s = 0.0;  ///< yaw rate, > 0 turns left
+  bool stop = true;          ///< true: the base must stop (v = omega = 0)
+  StopReason reason = StopReason::kNotLocalized;
+};
+
+struct StageTimings {
+  double extract_ms = 0.0;   ///< feature extraction of the current frame
+  double localize_ms = 0.0;  ///< initial localisation / relocalisation (0 when not run)
+  double match_ms = 0.0;     ///< two- and three-view matching for switching and control
+  double control_ms = 0.0;   ///< control law + schedule
+  double total_ms = 0.0;
+};
+
+struct Telemetry {
+  int64_t t_ns = 0;
+  int64_t frame_index = -1;
+  NavState state = NavState::kNotLocalized;
+  StopReason reason = StopReason::kNotLocalized;
+  // Segment.
+  int ip = -1, in = -1, inn = -1;
+  bool switched = false;     ///< IP/IN/INN advanced on this frame
+  int switch_streak = 0;     ///< consecutive frames a switch (or arrival) was wanted
+  int switch_criterion = 0;  ///< localization::SwitchCriterion bits (rules, passed, guard)
+  // Counts (verified correspondences).
+  int n_lines_next = 0, n_points_next = 0;            ///< Ia vs IN
+  int n_lines_next_next = 0, n_points_next_next = 0;  ///< Ia vs INN
+  // The switching counts below are computed lazily (-1: not needed this frame, see navigator).
+  int n_prev = -1;                 ///< n(IP, Ia)
+  int n_three_view_next = -1;      ///< nL + nP (Ia, IN, INN)
+  int n_three_view_prev = -1;      ///< nL + nP (IP, Ia, IN)
+  double next_scale_ratio = kNaN;  ///< apparent scale of IN's points in Ia (1 = at IN)
+  // Control.
+  double line_err_next = kNaN, line_err_next_next = kNaN;    ///< Xa - XN, Xa - XNN
+  double point_err_next = kNaN, point_err_next_next = kNaN;  ///< xa - xn, xa - xnn
+  double J_L = kNaN, J_P = kNaN;
+  bool used_lines = false, used_points = false;
+  double vnhv_lateral_m = kNaN, vnhv_heading_rad = kNaN;
+  double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
+  bool turning = false;
+  int64_t hold_elapsed_ns = 0;  ///< time since the last usable control, when holding
+  // Localisation.
+  bool localization_ran = false;
+  int localization_best = -1, localization_best_count = 0, localization_verified = 0;
+  StageTimings timings;
+};
+
+}  // namespace pepper::core::navigator

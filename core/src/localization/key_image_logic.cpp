@@ -1,0 +1,182 @@
+#include "core/localization/key_image_logic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace pepper::core::localization {
+
+Segment segment_ending_at(int next, int key_image_count) {
+  if (key_image_count < 2 || next < 1 || next >= key_image_count) {
+    std::ostringstream os;
+    os << "segment_ending_at: next = " << next << " not in [1, " << key_image_count - 1
+       << "] (key_image_count = " << key_image_count << ")";
+    throw std::invalid_argument(os.str());
+  }
+  Segment s;
+  s.prev = next - 1;
+  s.next = next;
+  if (next + 1 < key_image_count) s.next_next = next + 1;
+  return s;
+}
+
+std::vector<std::string> InitialLocalizationOptions::validate() const {
+  std::vector<std::string> errors;
+  if (min_best_count < 1) {
+    errors.push_back("localization.initial.min_best_count = " + std::to_string(min_best_count) +
+                     " must be >= 1");
+  }
+  return errors;
+}
+
+InitialLocalizationResult localize_from_counts(std::span<const int> counts,
+                                               const InitialLocalizationOptions& options) {
+  if (const auto errors = options.validate(); !errors.empty()) {
+    throw std::invalid_argument("localize_from_counts: " + errors.front());
+  }
+  const int n = static_cast<int>(counts.size());
+  if (n < 2) {
+    throw std::invalid_argument("localize_from_counts: a map needs at least 2 key images, got " +
+                                std::to_string(n));
+  }
+  InitialLocalizationResult r;
+  for (int k = 0; k < n; ++k) {
+    if (counts[k] >= 0 && (r.best < 0 || counts[k] > r.best_count)) {
+      r.best = k;
+      r.best_count = counts[k];
+    }
+  }
+  if (r.best < 0) return r;
+  const int i = r.best;
+  const int before = i > 0 ? counts[i - 1] : -1;
+  const int after = i + 1 < n ? counts[i + 1] : -1;
+  if (i == 0) {
+    r.neighbour = 1;
+  } else if (i == n - 1) {
+    r.neighbour = n - 2;
+  } else {
+    r.neighbour = after >= before ? i + 1 : i - 1;
+  }
+  if (r.best_count < options.min_best_count) return r;
+  r.segment = segment_ending_at(std::max(i, r.neighbour), n);
+  return r;
+}
+
+SwitchCriterion switch_criterion(const SwitchCounts& c) {
+  const bool three = c.three_view_next > c.three_view_prev;
+  const bool two = c.two_view_next_next > c.two_view_next && c.two_view_next_next > c.two_view_prev;
+  return static_cast<SwitchCriterion>((three ? 1 : 0) | (two ? 2 : 0));
+}
+
+std::vector<std::string> SwitcherOptions::validate() const {
+  std::vector<std::string> errors;
+  if (consecutive_frames < 1) {
+    errors.push_back("localization.switching.consecutive_frames = " +
+                     std::to_string(consecutive_frames) + " must be >= 1");
+  }
+  if (!(min_next_scale_ratio >= 0.0 && min_next_scale_ratio < 2.0)) {
+    errors.push_back("localization.switching.min_next_scale_ratio = " +
+                     std::to_string(min_next_scale_ratio) + " must be in [0, 2)");
+  }
+  if (!(passed_next_scale_ratio == 0.0 ||
+        (passed_next_scale_ratio > min_next_scale_ratio && passed_next_scale_ratio < 4.0))) {
+    errors.push_back("localization.switching.passed_next_scale_ratio = " +
+                     std::to_string(passed_next_scale_ratio) +
+                     " must be 0 (off) or in (min_next_scale_ratio, 4)");
+  }
+  return errors;
+}
+
+const char* to_string(SwitchEvent e) {
+  switch (e) {
+    case SwitchEvent::kNone:
+      return "none";
+    case SwitchEvent::kSwitched:
+      return "switched";
+    case SwitchEvent::kTourComplete:
+      return "tour_complete";
+  }
+  return "unknown";
+}
+
+KeyImageSwitcher::KeyImageSwitcher(Segment segment, int key_image_count,
+                                   const SwitcherOptions& options)
+    : segment_(segment), count_(key_image_count), options_(options) {
+  if (const auto errors = options_.validate(); !errors.empty()) {
+    throw std::invalid_argument("KeyImageSwitcher: " + errors.front());
+  }
+  if (!(segment_ == segment_ending_at(segment.next, key_image_count))) {
+    throw std::invalid_argument("KeyImageSwitcher: inconsistent segment for IN = " +
+                                std::to_string(segment.next));
+  }
+}
+
+SwitchUpdate KeyImageSwitcher::update(const SwitchCounts& counts, bool reached_final) {
+  SwitchUpdate u;
+  if (complete_) {
+    u.event = SwitchEvent::kTourComplete;
+    return u;
+  }
+  bool wanted = false;
+  if (segment_.next_next) {
+    u.criterion = switch_criterion(counts);
+    u.criteria_bits = static_cast<int>(u.criterion);
+    const double ratio = counts.next_scale_ratio;  // NaN compares false
+    const bool passed =
+        options_.passed_next_scale_ratio > 0.0 && ratio >= options_.passed_next_scale_ratio;
+    const bool guard_ok =
+        options_.min_next_scale_ratio <= 0.0 || ratio >= options_.min_next_scale_ratio;
+    if (passed) u.criteria_bits |= kCriterionPassedNext;
+    if (u.criterion != SwitchCriterion::kNone && !guard_ok)
+      u.criteria_bits |= kCriterionGuardBlocked;
+    wanted = (u.criterion != SwitchCriterion::kNone && guard_ok) || passed;
+  } else {
+    wanted = reached_final;
+  }
+  streak_ = wanted ? streak_ + 1 : 0;
+  u.streak = streak_;
+  if (streak_ >= options_.consecutive_frames) {
+    streak_ = 0;
+    if (segment_.next_next) {
+      segment_ = segment_ending_at(*segment_.next_next, count_);
+      u.event = SwitchEvent::kSwitched;
+    } else {
+      complete_ = true;
+      u.event = SwitchEvent::kTourComplete;
+    }
+  }
+  return u;
+}
+
+std::optional<double> median_scale_ratio(std::span<const cv::Point2d> key_norm,
+                                         std::span<const cv::Point2d> current_norm,
+                                         double min_separation_norm) {
+  if (key_norm.size() != current_norm.size()) {
+    throw std::invalid_argument("median_scale_ratio: sizes differ");
+  }
+  const size_t n = key_norm.size();
+  if (n < 3) return std::nullopt;
+  // Pairs (i, i + n/2 ...) would bias towards one layout; all pairs up to a cap, deterministic.
+  constexpr size_t kMaxPairs = 4000;
+  std::vector<double> ratios;
+  ratios.reserve(std::min(kMaxPairs, n * (n - 1) / 2));
+  const size_t stride = std::max<size_t>(1, n * (n - 1) / 2 / kMaxPairs);
+  size_t pair = 0;
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j, ++pair) {
+      if (pair % stride != 0) continue;
+      const double da = std::hypot(key_norm[i].x - key_norm[j].x, key_norm[i].y - key_norm[j].y);
+      const double db =
+          std::hypot(current_norm[i].x - current_norm[j].x, current_norm[i].y - current_norm[j].y);
+      if (da < min_separation_norm || db < min_separation_norm) continue;
+      ratios.push_back(db / da);
+    }
+  }
+  if (ratios.empty()) return std::nullopt;
+  auto mid = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
+  std::nth_element(ratios.begin(), mid, ratios.end());
+  return *mid;
+}
+
+}  // namespace pepper::core::localization

@@ -1,0 +1,48 @@
+#include "core/mapping/key_image_selector.hpp"
+
+#include <stdexcept>
+
+namespace pepper::core::mapping {
+
+std::vector<std::string> KeyImageSelectorOptions::validate() const {
+  std::vector<std::string> errors;
+  if (epsilon < 1) {
+    errors.push_back("mapping.epsilon = " + std::to_string(epsilon) + " must be >= 1");
+  }
+  if (min_frame_gap < 1) {
+    errors.push_back("mapping.min_frame_gap = " + std::to_string(min_frame_gap) + " must be >= 1");
+  }
+  return errors;
+}
+
+KeyImageSelector::KeyImageSelector(const KeyImageSelectorOptions& options) : options_(options) {
+  if (const auto errors = options_.validate(); !errors.empty()) {
+    throw std::invalid_argument("KeyImageSelector: " + errors.front());
+  }
+}
+
+std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count) {
+  if (finished_) throw std::invalid_argument("KeyImageSelector::on_frame after finish()");
+  if (c != last_ + 1) {
+    throw std::invalid_argument("KeyImageSelector::on_frame: frame " + std::to_string(c) +
+                                " after " + std::to_string(last_));
+  }
+  last_ = c;
+  if (count >= options_.epsilon) return std::nullopt;
+  const int64_t candidate = (c - 1 == key_) ? c : c - 1;
+  if (candidate - key_ < options_.min_frame_gap) return std::nullopt;
+  key_ = candidate;
+  keys_.push_back(key_);
+  return key_;
+}
+
+std::optional<int64_t> KeyImageSelector::finish() {
+  if (finished_) return std::nullopt;
+  finished_ = true;
+  if (last_ == key_) return std::nullopt;
+  key_ = last_;
+  keys_.push_back(key_);
+  return key_;
+}
+
+}  // namespace pepper::core::mapping

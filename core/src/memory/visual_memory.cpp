@@ -1,0 +1,426 @@
+#include "core/memory/visual_memory.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "memory/detail/binary_io.hpp"
+
+namespace pepper::core::memory {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Kind = MapError::Kind;
+
+MapError::MapError(Kind kind, fs::path path, const std::string& what)
+    : std::runtime_error(what), kind_(kind), path_(std::move(path)) {}
+
+const char* to_string(MapError::Kind kind) {
+  switch (kind) {
+    case Kind::kIo:
+      return "io";
+    case Kind::kMissingFile:
+      return "missing_file";
+    case Kind::kSizeMismatch:
+      return "size_mismatch";
+    case Kind::kChecksumMismatch:
+      return "checksum_mismatch";
+    case Kind::kMalformed:
+      return "malformed";
+    case Kind::kWrongVersion:
+      return "wrong_version";
+    case Kind::kIntrinsicsMismatch:
+      return "intrinsics_mismatch";
+    case Kind::kInvalidMap:
+      return "invalid_map";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr const char* kManifestName = "manifest.json";
+constexpr const char* kFormatName = "pepper-visual-memory";
+
+[[noreturn]] void io_error(const fs::path& path, const std::string& what) {
+  throw MapError(Kind::kIo, path, path.string() + ": " + what + " (" + std::strerror(errno) + ")");
+}
+
+void write_file_synced(const fs::path& path, const uint8_t* data, size_t size) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) io_error(path, "cannot create");
+  size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::write(fd, data + done, size - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      ::close(fd);
+      io_error(path, "write failed");
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    ::close(fd);
+    io_error(path, "fsync failed");
+  }
+  if (::close(fd) != 0) io_error(path, "close failed");
+}
+
+void fsync_dir(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) io_error(dir, "cannot open folder to fsync");
+  ::fsync(fd);  // best effort: some filesystems refuse fsync on folders
+  ::close(fd);
+}
+
+std::vector<uint8_t> read_file(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw MapError(Kind::kMissingFile, path, path.string() + ": missing");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) io_error(path, "cannot open");
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+  if (in.bad()) io_error(path, "read failed");
+  return bytes;
+}
+
+std::string key_name(size_t i, const char* ext) {
+  std::ostringstream os;
+  os << "key_" << std::setw(4) << std::setfill('0') << i << ext;
+  return os.str();
+}
+
+json camera_json(const CameraIntrinsics& k) {
+  return {{"width_px", k.width_px}, {"height_px", k.height_px}, {"fx_px", k.fx_px},
+          {"fy_px", k.fy_px},       {"cx_px", k.cx_px},         {"cy_px", k.cy_px}};
+}
+
+// Manifest CRC: over dump() of the manifest without its "manifest_crc32" field (nlohmann's
+// object keys are sorted, so dump() is canonical).
+uint32_t manifest_crc(json j) {
+  j.erase("manifest_crc32");
+  return detail::crc32(j.dump());
+}
+
+struct ManifestKey {
+  int64_t source_frame_index = -1;
+  int64_t t_ns = 0;
+  std::string image, features;
+  uint64_t image_bytes = 0, features_bytes = 0;
+  uint32_t image_crc32 = 0, features_crc32 = 0;
+  int lines = 0, corners = 0, keypoints = 0;
+};
+
+struct Manifest {
+  CameraIntrinsics camera;
+  std::string parameters_json;
+  std::vector<ManifestKey> keys;
+  int final_index = -1;
+};
+
+bool is_plain_file_name(const std::string& name) {
+  return !name.empty() && name.find('/') == std::string::npos && name != "." && name != "..";
+}
+
+Manifest parse_manifest(const fs::path& dir) {
+  const fs::path path = dir / kManifestName;
+  const std::vector<uint8_t> bytes = read_file(path);
+  auto malformed = [&](const std::string& what) -> MapError {
+    return MapError(Kind::kMalformed, path, path.string() + ": " + what);
+  };
+  json j;
+  try {
+    j = json::parse(bytes.begin(), bytes.end());
+  } catch (const json::exception& e) {
+    throw malformed(std::string("not valid JSON: ") + e.what());
+  }
+  Manifest m;
+  try {
+    if (!j.is_object() || j.value("format", std::string()) != kFormatName) {
+      throw malformed(std::string("not a map manifest (format != ") + kFormatName + ")");
+    }
+    const int version = j.at("format_version").get<int>();
+    if (version != kMapFormatVersion) {
+      throw MapError(Kind::kWrongVersion, path,
+                     path.string() + ": map format version " + std::to_string(version) +
+                         ", this build reads version " + std::to_string(kMapFormatVersion));
+    }
+    if (j.at("manifest_crc32").get<uint32_t>() != manifest_crc(j)) {
+      throw MapError(Kind::kChecksumMismatch, path,
+                     path.string() + ": manifest CRC-32 mismatch (edited or corrupt)");
+    }
+    const json& c = j.at("camera");
+    m.camera.width_px = c.at("width_px").get<int>();
+    m.camera.height_px = c.at("height_px").get<int>();
+    m.camera.fx_px = c.at("fx_px").get<double>();
+    m.camera.fy_px = c.at("fy_px").get<double>();
+    m.camera.cx_px = c.at("cx_px").get<double>();
+    m.camera.cy_px = c.at("cy_px").get<double>();
+    if (const auto errors = m.camera.validate(); !errors.empty()) {
+      throw malformed("camera: " + errors.front());
+    }
+    m.parameters_json = j.at("parameters").dump();
+    for (const json& k : j.at("key_images")) {
+      ManifestKey mk;
+      mk.source_frame_index = k.at("source_frame_index").get<int64_t>();
+      mk.t_ns = k.at("t_ns").get<int64_t>();
+      mk.image = k.at("image").get<std::string>();
+      mk.features = k.at("features").get<std::string>();
+      mk.image_bytes = k.at("image_bytes").get<uint64_t>();
+      mk.features_bytes = k.at("features_bytes").get<uint64_t>();
+      mk.image_crc32 = k.at("image_crc32").get<uint32_t>();
+      mk.features_crc32 = k.at("features_crc32").get<uint32_t>();
+      mk.lines = k.at("lines").get<int>();
+      mk.corners = k.at("corners").get<int>();
+      mk.keypoints = k.at("keypoints").get<int>();
+      if (!is_plain_file_name(mk.image) || !is_plain_file_name(mk.features)) {
+        throw malformed("key image file names must be plain names inside the map folder");
+      }
+      m.keys.push_back(std::move(mk));
+    }
+    m.final_index = j.at("final_image_index").get<int>();
+  } catch (const json::exception& e) {
+    throw malformed(std::string("missing or mistyped field: ") + e.what());
+  }
+  if (m.keys.size() < 2) throw malformed("a map needs at least 2 key images");
+  if (m.final_index != static_cast<int>(m.keys.size()) - 1) {
+    throw malformed("final_image_index must be the last key image");
+  }
+  return m;
+}
+
+std::vector<uint8_t> read_checked(const fs::path& path, uint64_t expected_bytes,
+                                  uint32_t expected_crc) {
+  std::vector<uint8_t> bytes = read_file(path);
+  if (bytes.size() != expected_bytes) {
+    throw MapError(Kind::kSizeMismatch, path,
+                   path.string() + ": " + std::to_string(bytes.size()) + " bytes, manifest says " +
+                       std::to_string(expected_bytes) + " (truncated or overwritten)");
+  }
+  if (detail::crc32(bytes) != expected_crc) {
+    throw MapError(Kind::kChecksumMismatch, path, path.string() + ": CRC-32 mismatch (corrupt)");
+  }
+  return bytes;
+}
+
+bool same_camera(const CameraIntrinsics& a, const CameraIntrinsics& b) {
+  auto close = [](double x, double y) {
+    return std::abs(x - y) <= 1e-6 * std::max(1.0, std::abs(y));
+  };
+  return a.width_px == b.width_px && a.height_px == b.height_px && close(a.fx_px, b.fx_px) &&
+         close(a.fy_px, b.fy_px) && close(a.cx_px, b.cx_px) && close(a.cy_px, b.cy_px);
+}
+
+fs::path sibling(const fs::path& dir, const std::string& tag) {
+  static std::atomic<unsigned> counter{0};
+  return dir.parent_path() / (dir.filename().string() + "." + tag + "-" +
+                              std::to_string(::getpid()) + "-" + std::to_string(counter++));
+}
+
+MapSummary summary_from_manifest(const Manifest& m) {
+  MapSummary s;
+  s.key_image_count = static_cast<int>(m.keys.size());
+  s.final_index = m.final_index;
+  s.camera = m.camera;
+  for (const ManifestKey& k : m.keys) {
+    s.key_images.push_back({k.source_frame_index, k.t_ns, k.lines, k.corners, k.keypoints});
+  }
+  if (!m.keys.empty()) {
+    s.taught_duration_s = static_cast<double>(m.keys.back().t_ns - m.keys.front().t_ns) * 1e-9;
+    s.first_frame_index = m.keys.front().source_frame_index;
+    s.last_frame_index = m.keys.back().source_frame_index;
+  }
+  return s;
+}
+
+}  // namespace
+
+void save_map(const VisualMemory& map, const fs::path& dir_in) {
+  const fs::path dir = fs::absolute(dir_in).lexically_normal();
+  if (map.key_images.size() < 2) {
+    throw MapError(Kind::kInvalidMap, dir, dir.string() + ": a map needs at least 2 key images");
+  }
+  if (const auto errors = map.camera.validate(); !errors.empty()) {
+    throw MapError(Kind::kInvalidMap, dir, dir.string() + ": camera: " + errors.front());
+  }
+  json parameters;
+  try {
+    parameters = json::parse(map.parameters_json.empty() ? "{}" : map.parameters_json);
+  } catch (const json::exception& e) {
+    throw MapError(Kind::kInvalidMap, dir, dir.string() + ": parameters_json is not JSON");
+  }
+  std::error_code ec;
+  if (!dir.parent_path().empty()) fs::create_directories(dir.parent_path(), ec);
+  const fs::path tmp = sibling(dir, "tmp");
+  fs::remove_all(tmp, ec);
+  if (!fs::create_directory(tmp, ec)) io_error(tmp, "cannot create temporary folder");
+  try {
+    json keys = json::array();
+    for (size_t i = 0; i < map.key_images.size(); ++i) {
+      const KeyImage& k = map.key_images[i];
+      const features::ImageFeatures& f = k.features;
+      if (f.gray.empty() || f.gray.type() != CV_8UC1 || f.gray.size() != f.image_size) {
+        throw MapError(Kind::kInvalidMap, dir,
+                       dir.string() + ": key image " + std::to_string(i) +
+                           " has no 8-bit grey image of its features' size");
+      }
+      std::vector<uint8_t> png;
+      if (!cv::imencode(".png", f.gray, png)) {
+        throw MapError(Kind::kIo, tmp / key_name(i, ".png"), "PNG encoding failed");
+      }
+      const std::vector<uint8_t> feat = detail::encode_features(f);
+      const std::string image_name = key_name(i, ".png"), feat_name = key_name(i, ".feat");
+      write_file_synced(tmp / image_name, png.data(), png.size());
+      write_file_synced(tmp / feat_name, feat.data(), feat.size());
+      keys.push_back({{"source_frame_index", k.source_frame_index},
+                      {"t_ns", k.t_ns},
+                      {"image", image_name},
+                      {"image_bytes", png.size()},
+                      {"image_crc32", detail::crc32(png)},
+                      {"features", feat_name},
+                      {"features_bytes", feat.size()},
+                      {"features_crc32", detail::crc32(feat)},
+                      {"lines", f.lines.size()},
+                      {"corners", f.corners_px.size()},
+                      {"keypoints", f.keypoints.size()}});
+    }
+    json manifest = {
+        {"format", kFormatName},
+        {"format_version", kMapFormatVersion},
+        {"camera", camera_json(map.camera)},
+        {"parameters", parameters},
+        {"key_images", keys},
+        {"final_image_index", map.final_index()},
+        {"taught_duration_s",
+         static_cast<double>(map.key_images.back().t_ns - map.key_images.front().t_ns) * 1e-9}};
+    manifest["manifest_crc32"] = manifest_crc(manifest);
+    const std::string text = manifest.dump(2) + "\n";
+    write_file_synced(tmp / kManifestName, reinterpret_cast<const uint8_t*>(text.data()),
+                      text.size());
+    fsync_dir(tmp);
+    fs::path old;
+    if (fs::exists(dir, ec)) {
+      old = sibling(dir, "old");
+      fs::rename(dir, old, ec);
+      if (ec) io_error(dir, "cannot move the existing map aside");
+    }
+    fs::rename(tmp, dir, ec);
+    if (ec) {
+      if (!old.empty()) fs::rename(old, dir, ec);  // put the previous map back
+      io_error(dir, "cannot rename the new map into place");
+    }
+    fsync_dir(dir.parent_path().empty() ? fs::path(".") : dir.parent_path());
+    if (!old.empty()) fs::remove_all(old, ec);
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+}
+
+VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
+  if (!fs::is_directory(dir)) {
+    throw MapError(Kind::kMissingFile, dir, dir.string() + ": no such map folder");
+  }
+  const Manifest m = parse_manifest(dir);
+  if (options.expected_camera) {
+    const CameraIntrinsics expected =
+        options.expected_camera->scaled_to(m.camera.width_px, m.camera.height_px);
+    if (!same_camera(m.camera, expected)) {
+      std::ostringstream os;
+      os << (dir / kManifestName).string() << ": map camera fx " << m.camera.fx_px << " fy "
+         << m.camera.fy_px << " cx " << m.camera.cx_px << " cy " << m.camera.cy_px
+         << " differs from the expected fx " << expected.fx_px << " fy " << expected.fy_px << " cx "
+         << expected.cx_px << " cy " << expected.cy_px;
+      throw MapError(Kind::kIntrinsicsMismatch, dir / kManifestName, os.str());
+    }
+  }
+  VisualMemory map;
+  map.camera = m.camera;
+  map.parameters_json = m.parameters_json;
+  for (const ManifestKey& k : m.keys) {
+    const fs::path feat_path = dir / k.features;
+    const fs::path image_path = dir / k.image;
+    KeyImage key;
+    key.source_frame_index = k.source_frame_index;
+    key.t_ns = k.t_ns;
+    key.features = detail::decode_features(
+        read_checked(feat_path, k.features_bytes, k.features_crc32), feat_path);
+    const std::vector<uint8_t> png = read_checked(image_path, k.image_bytes, k.image_crc32);
+    cv::Mat gray;
+    try {
+      gray = cv::imdecode(png, cv::IMREAD_GRAYSCALE);
+    } catch (const cv::Exception& e) {
+      gray.release();
+    }
+    if (gray.empty()) {
+      throw MapError(Kind::kMalformed, image_path, image_path.string() + ": not a decodable PNG");
+    }
+    if (gray.size() != key.features.image_size) {
+      throw MapError(Kind::kMalformed, image_path,
+                     image_path.string() + ": image size differs from its features file");
+    }
+    if (key.features.image_size != cv::Size(m.camera.width_px, m.camera.height_px)) {
+      throw MapError(Kind::kIntrinsicsMismatch, feat_path,
+                     feat_path.string() + ": image size differs from the manifest camera");
+    }
+    key.features.gray = gray;
+    if (options.build_klt_pyramids) features::build_klt_pyramid(key.features);
+    map.key_images.push_back(std::move(key));
+  }
+  return map;
+}
+
+MapSummary summarize(const VisualMemory& map) {
+  MapSummary s;
+  s.key_image_count = static_cast<int>(map.key_images.size());
+  s.final_index = map.final_index();
+  s.camera = map.camera;
+  for (const KeyImage& k : map.key_images) {
+    s.key_images.push_back({k.source_frame_index, k.t_ns, static_cast<int>(k.features.lines.size()),
+                            static_cast<int>(k.features.corners_px.size()),
+                            static_cast<int>(k.features.keypoints.size())});
+  }
+  if (!map.key_images.empty()) {
+    s.taught_duration_s =
+        static_cast<double>(map.key_images.back().t_ns - map.key_images.front().t_ns) * 1e-9;
+    s.first_frame_index = map.key_images.front().source_frame_index;
+    s.last_frame_index = map.key_images.back().source_frame_index;
+  }
+  return s;
+}
+
+MapSummary read_map_info(const fs::path& dir) {
+  if (!fs::is_directory(dir)) {
+    throw MapError(Kind::kMissingFile, dir, dir.string() + ": no such map folder");
+  }
+  return summary_from_manifest(parse_manifest(dir));
+}
+
+std::string MapSummary::to_text() const {
+  std::ostringstream os;
+  os << "key images: " << key_image_count << " (final image: " << final_index << ")\n"
+     << "taught duration: " << std::fixed << std::setprecision(1) << taught_duration_s << " s"
+     << " (frames " << first_frame_index << ".." << last_frame_index << ")\n"
+     << "camera: " << camera.width_px << "x" << camera.height_px << " fx " << std::setprecision(2)
+     << camera.fx_px << " fy " << camera.fy_px << " cx " << camera.cx_px << " cy " << camera.cy_px
+     << "\n";
+  for (size_t i = 0; i < key_images.size(); ++i) {
+    const PerKeyImage& k = key_images[i];
+    os << "  #" << i << " frame " << k.source_frame_index << " t " << std::setprecision(3)
+       << static_cast<double>(k.t_ns) * 1e-9 << " s: " << k.lines << " lines, " << k.corners
+       << " corners, " << k.keypoints << " keypoints\n";
+  }
+  return os.str();
+}
+
+}  // namespace pepper::core::memory

@@ -1,0 +1,455 @@
+#include "core/navigator/navigator.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/control/visual_features.hpp"
+
+namespace pepper::core::navigator {
+
+const char* to_string(ControllerKind k) {
+  switch (k) {
+    case ControllerKind::kIbvs:
+      return "ibvs";
+    case ControllerKind::kVnhv:
+      return "vnhv";
+  }
+  return "unknown";
+}
+
+const char* to_string(NavState s) {
+  switch (s) {
+    case NavState::kNotLocalized:
+      return "not_localized";
+    case NavState::kNavigating:
+      return "navigating";
+    case NavState::kHolding:
+      return "holding";
+    case NavState::kLost:
+      return "lost";
+    case NavState::kTourComplete:
+      return "tour_complete";
+  }
+  return "unknown";
+}
+
+const char* to_string(StopReason r) {
+  switch (r) {
+    case StopReason::kNone:
+      return "none";
+    case StopReason::kNotLocalized:
+      return "not_localized";
+    case StopReason::kFeaturesLost:
+      return "features_lost";
+    case StopReason::kTourComplete:
+      return "tour_complete";
+  }
+  return "unknown";
+}
+
+std::vector<std::string> NavigatorOptions::validate() const {
+  std::vector<std::string> errors;
+  auto append = [&](std::vector<std::string> more, const char* prefix) {
+    for (auto& e : more) errors.push_back(prefix + e);
+  };
+  append(ibvs.validate(), "");
+  append(vnhv.validate(), "");
+  append(schedule.validate(), "");
+  append(initial.validate(), "");
+  append(switching.validate(), "");
+  append(extractor.validate(), "features.");
+  append(matcher.validate(), "matching.");
+  auto check = [&](bool ok, const char* name, double value, const char* range) {
+    if (!ok) {
+      std::ostringstream os;
+      os << "navigator." << name << " = " << value << " must be " << range;
+      errors.push_back(os.str());
+    }
+  };
+  check(hold_ns >= 0, "hold_ns", static_cast<double>(hold_ns), ">= 0");
+  check(min_line_matches >= 1, "min_line_matches", min_line_matches, ">= 1");
+  check(min_point_matches >= 1, "min_point_matches", min_point_matches, ">= 1");
+  check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
+  check(min_point_texture >= 0.0, "min_point_texture", min_point_texture, ">= 0");
+  check(arrival_scale_ratio > 0.0 && arrival_scale_ratio < 2.0, "arrival_scale_ratio",
+        arrival_scale_ratio, "in (0, 2)");
+  return errors;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+Command stop_command(StopReason reason) {
+  Command c;
+  c.stop = true;
+  c.reason = reason;
+  return c;
+}
+
+control::LineRhoTheta to_control(const features::RhoTheta& l) { return {l.rho, l.theta_rad}; }
+
+struct LineSets {
+  std::vector<control::LineRhoTheta> current, key;
+};
+LineSets line_sets(const features::TwoViewMatches& m, const features::ImageFeatures& key,
+                   const features::ImageFeatures& current) {
+  LineSets s;
+  for (const features::LineMatch& lm : m.lines) {
+    s.key.push_back(to_control(key.lines[lm.idx_a].line));
+    s.current.push_back(to_control(current.lines[lm.idx_b].line));
+  }
+  return s;
+}
+
+struct PointSets {
+  std::vector<cv::Point2d> current, key;
+};
+// Minimum eigenvalue of the mean structure tensor of `gray` in a 7x7 window at p (central
+// differences); 0 at the border.
+double min_texture_eig(const cv::Mat& gray, const cv::Point2f& p) {
+  constexpr int kHalf = 3;
+  const int cx = cvRound(p.x), cy = cvRound(p.y);
+  if (cx - kHalf - 1 < 0 || cy - kHalf - 1 < 0 || cx + kHalf + 1 >= gray.cols ||
+      cy + kHalf + 1 >= gray.rows) {
+    return 0.0;
+  }
+  double a = 0, b = 0, c = 0;
+  for (int y = cy - kHalf; y <= cy + kHalf; ++y) {
+    const uint8_t* row = gray.ptr<uint8_t>(y);
+    const uint8_t* up = gray.ptr<uint8_t>(y - 1);
+    const uint8_t* down = gray.ptr<uint8_t>(y + 1);
+    for (int x = cx - kHalf; x <= cx + kHalf; ++x) {
+      const double gx = 0.5 * (row[x + 1] - row[x - 1]);
+      const double gy = 0.5 * (down[x] - up[x]);
+      a += gx * gx;
+      b += gx * gy;
+      c += gy * gy;
+    }
+  }
+  constexpr double kN = (2 * kHalf + 1) * (2 * kHalf + 1);
+  a /= kN;
+  b /= kN;
+  c /= kN;
+  return 0.5 * (a + c - std::sqrt((a - c) * (a - c) + 4 * b * b));
+}
+
+// Point pairs (key, current) of a two-view result; with `gray`, only those whose current
+// location is textured (min_texture_eig >= min_texture).
+PointSets point_sets(const features::TwoViewMatches& m, const cv::Mat& gray = cv::Mat(),
+                     double min_texture = 0.0) {
+  PointSets s;
+  for (const features::PointMatch& pm : m.points) {
+    if (!gray.empty() && min_texture_eig(gray, pm.b_px) < min_texture) continue;
+    s.key.push_back(pm.a_norm);
+    s.current.push_back(pm.b_norm);
+  }
+  return s;
+}
+
+// Relative pose (R_b_a, t_b_a) from the verified points of a two-view result (a -> b).
+std::optional<std::pair<cv::Matx33d, cv::Vec3d>> relative_pose(const features::TwoViewMatches& m) {
+  if (!m.essential_found || m.points.size() < 8) return std::nullopt;
+  std::vector<cv::Point2d> a, b;
+  for (const auto& p : m.points) {
+    a.push_back(p.a_norm);
+    b.push_back(p.b_norm);
+  }
+  cv::Mat R, t;
+  const int good = cv::recoverPose(cv::Mat(m.E_b_a), a, b, cv::Mat::eye(3, 3, CV_64F), R, t);
+  if (good < 5) return std::nullopt;
+  return std::make_pair(cv::Matx33d(R), cv::Vec3d(t));
+}
+
+}  // namespace
+
+Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
+    : map_(std::move(map)),
+      options_(options),
+      extractor_(map_.camera, options.extractor),
+      schedule_(options.schedule) {
+  if (const auto errors = options_.validate(); !errors.empty()) {
+    throw std::invalid_argument("Navigator: " + errors.front());
+  }
+  if (map_.key_images.size() < 2) {
+    throw std::invalid_argument("Navigator: the map has fewer than 2 key images");
+  }
+}
+
+void Navigator::reset() {
+  state_ = NavState::kNotLocalized;
+  switcher_.reset();
+  schedule_.reset();
+  has_command_ = false;
+  last_t_ns_.reset();
+  vnhv_segment_next_ = -1;
+  vnhv_prev_in_next_.reset();
+}
+
+void Navigator::ensure_pyramids(const localization::Segment& seg) {
+  const int last = seg.next_next.value_or(seg.next);
+  for (int i = 0; i < static_cast<int>(map_.key_images.size()); ++i) {
+    features::ImageFeatures& f = map_.key_images[i].features;
+    const bool wanted = i >= seg.prev && i <= last;
+    if (wanted && f.klt_pyramid.empty()) features::build_klt_pyramid(f, options_.matcher.klt);
+    if (!wanted && !f.klt_pyramid.empty()) features::release_klt_pyramid(f);
+  }
+}
+
+void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
+  const auto t0 = Clock::now();
+  const localization::InitialLocalizationReport report =
+      localization::localize_in_map(fm, map_, options_.initial);
+  tel.localization_ran = true;
+  tel.localization_best = report.result.best;
+  tel.localization_best_count = report.result.best_count;
+  tel.localization_verified = report.verified;
+  if (report.result.segment) {
+    switcher_.emplace(*report.result.segment, static_cast<int>(map_.key_images.size()),
+                      options_.switching);
+    state_ = NavState::kNavigating;
+    schedule_.reset();
+    has_command_ = false;
+  }
+  tel.timings.localize_ms = ms_since(t0);
+}
+
+std::optional<double> Navigator::ibvs_omega(features::FrameMatcher& fm, Telemetry& tel) {
+  const localization::Segment& seg = switcher_->segment();
+  const features::ImageFeatures& cur = fm.current();
+  const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
+  const features::TwoViewMatches* tv_nn =
+      seg.next_next ? &fm.two_view(*seg.next_next, key(*seg.next_next)) : nullptr;
+  control::IbvsInput in;
+  if (tv_n.n_lines() >= options_.min_line_matches) {
+    const LineSets s = line_sets(tv_n, key(seg.next), cur);
+    control::ModalityError m;
+    m.err_next = control::line_feature_X(s.current) - control::line_feature_X(s.key);
+    m.jacobian = control::line_jacobian_dX_domega(s.current);
+    if (tv_nn && tv_nn->n_lines() >= options_.min_line_matches) {
+      const LineSets s2 = line_sets(*tv_nn, key(*seg.next_next), cur);
+      m.err_next_next = control::line_feature_X(s2.current) - control::line_feature_X(s2.key);
+    }
+    in.lines = m;
+  }
+  const PointSets s = point_sets(tv_n, cur.gray, options_.min_point_texture);
+  if (static_cast<int>(s.current.size()) >= options_.min_point_matches) {
+    control::ModalityError m;
+    m.err_next = control::point_feature_x(s.current) - control::point_feature_x(s.key);
+    m.jacobian = control::point_jacobian_dx_domega(s.current);
+    if (tv_nn) {
+      const PointSets s2 = point_sets(*tv_nn, cur.gray, options_.min_point_texture);
+      if (static_cast<int>(s2.current.size()) >= options_.min_point_matches) {
+        m.err_next_next = control::point_feature_x(s2.current) - control::point_feature_x(s2.key);
+      }
+    }
+    in.points = m;
+  }
+  const control::IbvsResult r = control::compute_ibvs_omega(in, options_.ibvs);
+  if (in.lines) {
+    tel.line_err_next = in.lines->err_next;
+    tel.line_err_next_next = in.lines->err_next_next.value_or(kNaN);
+    tel.J_L = in.lines->jacobian;
+  }
+  if (in.points) {
+    tel.point_err_next = in.points->err_next;
+    tel.point_err_next_next = in.points->err_next_next.value_or(kNaN);
+    tel.J_P = in.points->jacobian;
+  }
+  tel.used_lines = r.used_lines;
+  tel.used_points = r.used_points;
+  return r.omega_rad_s;
+}
+
+std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetry& tel) {
+  const localization::Segment& seg = switcher_->segment();
+  if (vnhv_segment_next_ != seg.next) {
+    vnhv_segment_next_ = seg.next;
+    vnhv_prev_in_next_.reset();
+    const features::TwoViewMatches prev_next =
+        features::match_two_view(key(seg.prev), key(seg.next), options_.matcher);
+    if (const auto pose = relative_pose(prev_next)) {  // a = IP, b = IN: T_IN_IP
+      vnhv_prev_in_next_ = control::planar_pose_from_camera(pose->first, pose->second);
+    }
+  }
+  const auto cur_pose = relative_pose(fm.two_view(seg.next, key(seg.next)));  // T_cur_IN
+  if (!vnhv_prev_in_next_ || !cur_pose) return std::nullopt;
+  const cv::Matx33d R_next_cur = cur_pose->first.t();
+  const cv::Vec3d t_next_cur = -(R_next_cur * cur_pose->second);
+  const control::PlanarPose cur_in_next = control::planar_pose_from_camera(R_next_cur, t_next_cur);
+  const auto dev = control::deviation_from_segment(*vnhv_prev_in_next_, cur_in_next,
+                                                   options_.vnhv.nominal_distance_to_next_m);
+  if (!dev) return std::nullopt;
+  tel.vnhv_lateral_m = dev->lateral_m;
+  tel.vnhv_heading_rad = dev->heading_rad;
+  const double v = has_command_ ? last_command_.v_m_s : options_.schedule.v_straight_m_s;
+  return control::vnhv_omega(v, dev->lateral_m, dev->heading_rad, options_.vnhv);
+}
+
+StepResult Navigator::step(const Frame& frame) {
+  const auto t_start = Clock::now();
+  if (frame.gray.empty() || frame.gray.type() != CV_8UC1) {
+    throw std::invalid_argument("Navigator::step: frame " + std::to_string(frame.index) +
+                                " is not a non-empty CV_8UC1 image");
+  }
+  if (frame.gray.cols != map_.camera.width_px || frame.gray.rows != map_.camera.height_px) {
+    std::ostringstream os;
+    os << "Navigator::step: frame " << frame.index << " is " << frame.gray.cols << "x"
+       << frame.gray.rows << ", the map's images are " << map_.camera.width_px << "x"
+       << map_.camera.height_px;
+    throw std::invalid_argument(os.str());
+  }
+  if (last_t_ns_ && frame.t_ns < *last_t_ns_) {
+    throw std::invalid_argument("Navigator::step: t_ns " + std::to_string(frame.t_ns) +
+                                " is before the previous frame's " + std::to_string(*last_t_ns_));
+  }
+  last_t_ns_ = frame.t_ns;
+
+  StepResult out;
+  Telemetry& tel = out.telemetry;
+  tel.t_ns = frame.t_ns;
+  tel.frame_index = frame.index;
+  auto finish = [&](const Command& c) {
+    out.command = c;
+    tel.state = state_;
+    tel.reason = c.reason;
+    if (switcher_) {
+      const auto& seg = switcher_->segment();
+      tel.ip = seg.prev;
+      tel.in = seg.next;
+      tel.inn = seg.next_next.value_or(-1);
+    }
+    tel.timings.total_ms = ms_since(t_start);
+    return out;
+  };
+  if (state_ == NavState::kTourComplete) return finish(stop_command(StopReason::kTourComplete));
+
+  const bool need_localization = state_ == NavState::kNotLocalized || state_ == NavState::kLost;
+  auto t0 = Clock::now();
+  unsigned parts = features::kPartsCurrentFrame;
+  if (need_localization) parts |= features::kPartWideBaseline;
+  features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher);
+  tel.timings.extract_ms = ms_since(t0);
+
+  if (need_localization) {
+    const NavState before = state_;
+    localize(fm, tel);
+    if (state_ != NavState::kNavigating) {
+      return finish(stop_command(before == NavState::kLost ? StopReason::kFeaturesLost
+                                                           : StopReason::kNotLocalized));
+    }
+  }
+
+  // Switching (counts on the current segment).
+  t0 = Clock::now();
+  {
+    const localization::Segment seg = switcher_->segment();
+    ensure_pyramids(seg);
+    const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
+    tel.n_lines_next = tv_n.n_lines();
+    tel.n_points_next = tv_n.n_points();
+    localization::SwitchCounts counts;
+    counts.two_view_next = tv_n.total();
+    bool reached_final = false;
+    {
+      const PointSets s = point_sets(tv_n);
+      const bool enough = static_cast<int>(s.key.size()) >= options_.min_scale_points;
+      if (const auto ratio =
+              enough ? localization::median_scale_ratio(s.key, s.current) : std::nullopt) {
+        counts.next_scale_ratio = *ratio;
+        tel.next_scale_ratio = *ratio;
+      }
+    }
+    if (seg.next_next) {
+      const int nn = *seg.next_next;
+      const features::TwoViewMatches& tv_nn = fm.two_view(nn, key(nn));  // control needs it too
+      tel.n_lines_next_next = tv_nn.n_lines();
+      tel.n_points_next_next = tv_nn.n_points();
+      counts.two_view_next_next = tv_nn.total();
+      // Lazy evaluation (same decisions as computing everything, see KeyImageSwitcher): when
+      // the scale guard blocks, the paper's rules do not matter; n(IP, Ia) matters only if
+      // n(Ia, INN) > n(Ia, IN); the three-view counts only if the two-view rule fails.
+      const auto& sw = options_.switching;
+      const bool guard_blocks =
+          sw.min_next_scale_ratio > 0.0 && !(counts.next_scale_ratio >= sw.min_next_scale_ratio);
+      if (!guard_blocks) {
+        bool two_view_rule = false;
+        if (counts.two_view_next_next > counts.two_view_next) {
+          tel.n_prev = fm.two_view(seg.prev, key(seg.prev)).total();
+          counts.two_view_prev = tel.n_prev;
+          two_view_rule = counts.two_view_next_next > counts.two_view_prev;
+        }
+        if (!two_view_rule) {
+          counts.three_view_next = fm.three_view(seg.next, key(seg.next), nn, key(nn)).total();
+          counts.three_view_prev =
+              fm.three_view(seg.prev, key(seg.prev), seg.next, key(seg.next)).total();
+          tel.n_three_view_next = counts.three_view_next;
+          tel.n_three_view_prev = counts.three_view_prev;
+        }
+      }
+    } else {
+      reached_final = counts.next_scale_ratio >= options_.arrival_scale_ratio;  // NaN: false
+    }
+    const localization::SwitchUpdate u = switcher_->update(counts, reached_final);
+    tel.switch_streak = u.streak;
+    tel.switch_criterion = u.criteria_bits;
+    tel.switched = u.event == localization::SwitchEvent::kSwitched;
+    if (u.event == localization::SwitchEvent::kTourComplete) {
+      state_ = NavState::kTourComplete;
+      schedule_.reset();
+      tel.timings.match_ms = ms_since(t0);
+      return finish(stop_command(StopReason::kTourComplete));
+    }
+    if (tel.switched) ensure_pyramids(switcher_->segment());
+  }
+
+  // Control on the (possibly new) segment.
+  std::optional<double> omega;
+  if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
+  if (!omega) omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
+  tel.timings.match_ms = ms_since(t0);
+  t0 = Clock::now();
+  Command cmd;
+  if (omega) {
+    tel.omega_demand_rad_s = *omega;
+    const control::BaseCommand b = schedule_.step(*omega, frame.t_ns);
+    cmd.v_m_s = b.v_m_s;
+    cmd.omega_rad_s = b.omega_rad_s;
+    cmd.stop = false;
+    cmd.reason = StopReason::kNone;
+    tel.turning = b.turning;
+    state_ = NavState::kNavigating;
+    last_command_ = cmd;
+    last_good_t_ns_ = frame.t_ns;
+    has_command_ = true;
+  } else if (has_command_ && frame.t_ns - last_good_t_ns_ <= options_.hold_ns) {
+    state_ = NavState::kHolding;
+    cmd = last_command_;
+    tel.hold_elapsed_ns = frame.t_ns - last_good_t_ns_;
+    tel.turning = schedule_.turning();
+  } else {
+    tel.hold_elapsed_ns = has_command_ ? frame.t_ns - last_good_t_ns_ : 0;
+    state_ = NavState::kLost;
+    cmd = stop_command(StopReason::kFeaturesLost);
+    schedule_.reset();
+    has_command_ = false;
+    vnhv_segment_next_ = -1;
+  }
+  tel.timings.control_ms = ms_since(t0);
+  Command final_cmd = cmd;
+  out.command = final_cmd;
+  finish(final_cmd);
+  if (state_ == NavState::kLost) {
+    // Keep the last segment in telemetry for this frame, then forget it (relocalise next).
+    switcher_.reset();
+  }
+  return out;
+}
+
+}  // namespace pepper::core::navigator

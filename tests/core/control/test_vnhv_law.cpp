@@ -1,0 +1,135 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "core/control/vnhv_law.hpp"
+#include "support/numeric_diff.hpp"
+
+namespace pepper::core::control {
+namespace {
+
+TEST(VnhvLaw, HandComputedCases) {
+  const VnhvOptions o;  // Kp = 4, Kd = 4
+  // On the path: no rotation.
+  EXPECT_DOUBLE_EQ(*vnhv_omega(0.15, 0.0, 0.0, o), 0.0);
+  // Left of the path, parallel: -V Kp y = -0.15 * 4 * 0.1 = -0.06 (turn right, towards it).
+  EXPECT_NEAR(*vnhv_omega(0.15, 0.1, 0.0, o), -0.06, 1e-15);
+  // On the path, heading left by 0.2 rad: -|V c^3| Kd tan(0.2).
+  const double c3 = std::pow(std::cos(0.2), 3);
+  EXPECT_NEAR(*vnhv_omega(0.15, 0.0, 0.2, o), -0.15 * c3 * 4 * std::tan(0.2), 1e-15);
+  // Reversing (V < 0): the lateral term changes sign, the heading damping does not.
+  EXPECT_NEAR(*vnhv_omega(-0.15, 0.1, 0.0, o), 0.06, 1e-15);
+  EXPECT_NEAR(*vnhv_omega(-0.15, 0.0, 0.2, o), -0.15 * c3 * 4 * std::tan(0.2), 1e-15);
+  // Singular region: no command.
+  EXPECT_FALSE(vnhv_omega(0.15, 0.0, 1.3, o));
+  EXPECT_THROW(vnhv_omega(std::nan(""), 0, 0, o), std::invalid_argument);
+}
+
+// Unicycle y' = V sin(theta), theta' = omega integrated with small steps (RK4).
+struct State {
+  double y, theta;
+};
+std::vector<State> simulate(double v, State s0, double distance_m, const VnhvOptions& o) {
+  const double dt = 0.002 / std::abs(v);  // 2 mm of travel per step
+  std::vector<State> out{s0};
+  auto f = [&](const State& s) {
+    return State{v * std::sin(s.theta), *vnhv_omega(v, s.y, s.theta, o)};
+  };
+  State s = s0;
+  const int n = static_cast<int>(distance_m / 0.002);
+  for (int i = 0; i < n; ++i) {
+    const State k1 = f(s);
+    const State k2 = f({s.y + dt / 2 * k1.y, s.theta + dt / 2 * k1.theta});
+    const State k3 = f({s.y + dt / 2 * k2.y, s.theta + dt / 2 * k2.theta});
+    const State k4 = f({s.y + dt * k3.y, s.theta + dt * k3.theta});
+    s.y += dt / 6 * (k1.y + 2 * k2.y + 2 * k3.y + k4.y);
+    s.theta += dt / 6 * (k1.theta + 2 * k2.theta + 2 * k3.theta + k4.theta);
+    out.push_back(s);
+  }
+  return out;
+}
+
+TEST(VnhvLaw, ConvergesWithSettlingDistanceIndependentOfSpeed) {
+  const VnhvOptions o;
+  const auto slow = simulate(0.08, {0.2, 0.3}, 4.0, o);
+  const auto fast = simulate(0.30, {0.2, 0.3}, 4.0, o);
+  ASSERT_EQ(slow.size(), fast.size());
+  for (size_t i = 0; i < slow.size(); ++i) {
+    // Same trajectory as a function of distance (chained form): only integration error differs.
+    ASSERT_NEAR(slow[i].y, fast[i].y, 1e-9);
+  }
+  EXPECT_LT(std::abs(slow.back().y), 0.002);  // 4 m = ~10 time constants of 1/2 m
+  EXPECT_LT(std::abs(slow.back().theta), 0.005);
+}
+
+TEST(VnhvLaw, LinearisationIsCriticallyDampedSecondOrder) {
+  // Small deviations: y(s) follows y'' + Kd y' + Kp y = 0; with Kp = 4, Kd = 4 (double root -2):
+  // y(s) = (y0 + (y0' + 2 y0) s) e^{-2 s}, y0' = tan(theta0).
+  const VnhvOptions o;
+  const double y0 = 1e-3, th0 = 0.0;
+  const auto traj = simulate(0.15, {y0, th0}, 2.0, o);
+  for (size_t i = 0; i < traj.size(); i += 50) {
+    const double s = 0.002 * static_cast<double>(i);
+    const double expected = (y0 + (std::tan(th0) + 2 * y0) * s) * std::exp(-2 * s);
+    ASSERT_NEAR(traj[i].y, expected, 1e-8) << "s = " << s;
+  }
+}
+
+TEST(VnhvLaw, DerivativeOfOmegaMatchesLinearGains) {
+  // d omega / d y at 0 = -V Kp, d omega / d theta at 0 = -|V| Kd (central differences).
+  const VnhvOptions o;
+  const double v = 0.15;
+  const double dy = test::central_diff([&](double y) { return *vnhv_omega(v, y, 0.0, o); }, 0.0);
+  const double dth = test::central_diff([&](double t) { return *vnhv_omega(v, 0.0, t, o); }, 0.0);
+  EXPECT_NEAR(dy, -v * o.kp_1_m2, 1e-8);
+  EXPECT_NEAR(dth, -v * o.kd_1_m, 1e-8);
+}
+
+cv::Matx33d rot_y(double beta) {
+  const double c = std::cos(beta), s = std::sin(beta);
+  return {c, 0, s, 0, 1, 0, -s, 0, c};
+}
+
+TEST(VnhvGeometry, PlanarPoseFromCameraTransform) {
+  // Camera b is 1 m ahead and 0.2 m to the left of a, turned left by 0.3 rad.
+  // Left turn = rotation about camera -y: R_a_b = Ry(-0.3); left = -x in the camera.
+  const PlanarPose p = planar_pose_from_camera(rot_y(-0.3), {-0.2, 0.0, 1.0});
+  EXPECT_NEAR(p.x_m, 1.0, 1e-15);
+  EXPECT_NEAR(p.y_m, 0.2, 1e-15);
+  EXPECT_NEAR(p.yaw_rad, 0.3, 1e-15);
+}
+
+TEST(VnhvGeometry, DeviationFromSegment) {
+  // Segment from IP at (-1, 0) to IN at the origin, travel along +x.
+  const PlanarPose prev{-1.0, 0.0, 0.0};
+  auto dev = deviation_from_segment(prev, {-0.5, 0.1, 0.2}, -1.0);
+  ASSERT_TRUE(dev);
+  EXPECT_NEAR(dev->lateral_m, 0.1, 1e-15);
+  EXPECT_NEAR(dev->heading_rad, 0.2, 1e-15);
+  // Scale-free current position, rescaled to 0.5 m from IN: bearing (-0.3, -0.4) -> (-0.3,-0.4).
+  dev = deviation_from_segment({-3.0, 0.0, 0.0}, {-3.0, -4.0, 0.0}, 0.5);
+  ASSERT_TRUE(dev);
+  EXPECT_NEAR(dev->lateral_m, -0.4, 1e-12);
+  // Segment direction rotated: IP at (-1, -1): direction 45 deg left.
+  dev = deviation_from_segment({-1.0, -1.0, 0.0}, {-0.5, -0.5, std::numbers::pi / 4}, -1.0);
+  ASSERT_TRUE(dev);
+  EXPECT_NEAR(dev->lateral_m, 0.0, 1e-15);
+  EXPECT_NEAR(dev->heading_rad, 0.0, 1e-15);
+  EXPECT_FALSE(deviation_from_segment({0.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}, -1.0));
+}
+
+TEST(VnhvLaw, ValidateNamesBadFields) {
+  VnhvOptions o;
+  EXPECT_TRUE(o.validate().empty());
+  o.kd_1_m = 0.0;
+  o.max_abs_theta_rad = 2.0;
+  const auto e = o.validate();
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_NE(e[0].find("kd_1_m"), std::string::npos);
+  EXPECT_NE(e[1].find("max_abs_theta_rad"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pepper::core::control

@@ -1,0 +1,100 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/mapping/key_image_selector.hpp"
+
+namespace pepper::core::mapping {
+namespace {
+
+TEST(KeyImageSelector, ScriptedCounts) {
+  KeyImageSelectorOptions o;
+  o.epsilon = 10;
+  o.min_frame_gap = 1;  // the paper's rule
+  KeyImageSelector s(o);
+  EXPECT_EQ(s.key(), 0);
+  EXPECT_FALSE(s.on_frame(1, 50));
+  EXPECT_FALSE(s.on_frame(2, 10));  // equal to epsilon: not below
+  EXPECT_EQ(*s.on_frame(3, 9), 2);  // below: Ic-1 = 2 becomes key
+  EXPECT_EQ(s.key(), 2);
+  EXPECT_FALSE(s.on_frame(4, 30));
+  EXPECT_EQ(*s.on_frame(5, 3), 4);
+  EXPECT_EQ(*s.on_frame(6, 0), 5);
+  EXPECT_FALSE(s.on_frame(7, 40));
+  EXPECT_EQ(*s.finish(), 7);  // last frame stored
+  EXPECT_EQ(s.key_images(), (std::vector<int64_t>{0, 2, 4, 5, 7}));
+  EXPECT_THROW(s.on_frame(8, 50), std::invalid_argument);
+}
+
+TEST(KeyImageSelector, MinFrameGap) {
+  KeyImageSelectorOptions o;
+  o.epsilon = 10;
+  o.min_frame_gap = 3;
+  KeyImageSelector s(o);
+  EXPECT_FALSE(s.on_frame(1, 0));   // candidate 1: gap 1 < 3
+  EXPECT_FALSE(s.on_frame(2, 0));   // candidate 1: gap 1
+  EXPECT_FALSE(s.on_frame(3, 0));   // candidate 2: gap 2
+  EXPECT_EQ(*s.on_frame(4, 0), 3);  // candidate 3: gap 3
+  EXPECT_FALSE(s.on_frame(5, 0));
+  EXPECT_FALSE(s.on_frame(6, 0));
+  EXPECT_EQ(*s.on_frame(7, 5), 6);
+  o.min_frame_gap = 0;
+  EXPECT_EQ(o.validate().size(), 1u);
+}
+
+TEST(KeyImageSelector, LastFrameAlreadyKeyAndBadInput) {
+  KeyImageSelectorOptions paper;
+  paper.min_frame_gap = 1;
+  KeyImageSelector s(paper);
+  EXPECT_EQ(*s.on_frame(1, 0), 1);  // Ic-1 is the key itself: Ic becomes the key image
+  EXPECT_FALSE(s.finish());         // the last frame already is the key image
+  EXPECT_EQ(s.key_images(), (std::vector<int64_t>{0, 1}));
+  KeyImageSelector t;
+  EXPECT_THROW(t.on_frame(2, 100), std::invalid_argument);  // frames must be consecutive
+  KeyImageSelectorOptions bad;
+  bad.epsilon = 0;
+  ASSERT_EQ(bad.validate().size(), 1u);
+  EXPECT_NE(bad.validate()[0].find("epsilon"), std::string::npos);
+  EXPECT_THROW(KeyImageSelector{bad}, std::invalid_argument);
+}
+
+// Synthetic count model: a tour of straight parts and one 90-degree turn, one frame per 3 cm of
+// travel (0.15 m/s at 5 Hz) or per 0.05 rad while turning on the spot-ish. Shared features decay
+// with the distance travelled and, much faster, with the yaw change since the key image:
+//   count(k, c) = 200 exp(-|s_c - s_k| / 1.5 m - |yaw_c - yaw_k| / 0.35 rad).
+TEST(KeyImageSelector, DenserKeyImagesInTurns) {
+  std::vector<double> s_m, yaw;
+  auto push = [&](double ds, double dyaw) {
+    s_m.push_back(s_m.empty() ? 0.0 : s_m.back() + ds);
+    yaw.push_back(yaw.empty() ? 0.0 : yaw.back() + dyaw);
+  };
+  for (int i = 0; i < 150; ++i) push(0.03, 0.0);    // frames 0..149 straight 4.5 m
+  for (int i = 0; i < 32; ++i) push(0.016, 0.049);  // 150..181 turn ~90 deg
+  for (int i = 0; i < 150; ++i) push(0.03, 0.0);    // straight again
+  auto count = [&](int64_t k, int64_t c) {
+    return static_cast<int>(
+        200.0 * std::exp(-std::abs(s_m[c] - s_m[k]) / 1.5 - std::abs(yaw[c] - yaw[k]) / 0.35));
+  };
+  KeyImageSelectorOptions o;
+  o.epsilon = 60;
+  o.min_frame_gap = 1;
+  KeyImageSelector sel(o);
+  for (int64_t c = 1; c < static_cast<int64_t>(s_m.size()); ++c)
+    sel.on_frame(c, count(sel.key(), c));
+  sel.finish();
+  const auto& keys = sel.key_images();
+  int straight = 0, turning = 0;
+  for (int64_t k : keys) (k > 150 && k <= 182 ? turning : straight) += 1;
+  // Per frame: straight parts have 300 frames, the turn 32.
+  const double straight_density = straight / 300.0, turn_density = turning / 32.0;
+  EXPECT_GE(turning, 3);
+  EXPECT_GT(turn_density, 3.0 * straight_density)
+      << "turn " << turning << " keys / 32 frames, straight " << straight << " / 300";
+  for (size_t i = 1; i < keys.size(); ++i) EXPECT_GT(keys[i], keys[i - 1]);
+  EXPECT_EQ(keys.front(), 0);
+  EXPECT_EQ(keys.back(), static_cast<int64_t>(s_m.size()) - 1);
+}
+
+}  // namespace
+}  // namespace pepper::core::mapping

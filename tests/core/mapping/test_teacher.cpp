@@ -1,0 +1,73 @@
+// Teach on synthetic rendered images (tests/core/navigator/test_world.hpp): online and offline
+// give the same map; key images are denser in the turn than on straight runs.
+#include <gtest/gtest.h>
+
+#include "core/mapping/teacher.hpp"
+#include "core/navigator/test_world.hpp"
+
+namespace pepper::core::mapping {
+namespace {
+
+using test::shared_tour;
+
+TEST(Teacher, OnlineAndOfflineGiveTheSameMap) {
+  const auto& tour = shared_tour();
+  Teacher online(tour.camera, tour.teach_options);
+  for (size_t i = 0; i < tour.frames.size(); ++i) {
+    const TeachStep s = online.add_frame(tour.frames[i]);
+    ASSERT_EQ(s.count, tour.steps[i].count) << "frame " << i;
+    ASSERT_EQ(s.new_key_frame, tour.steps[i].new_key_frame) << "frame " << i;
+  }
+  const memory::VisualMemory map = online.finish();
+  const memory::VisualMemory& offline = tour.map;
+  ASSERT_EQ(map.key_images.size(), offline.key_images.size());
+  for (size_t i = 0; i < map.key_images.size(); ++i) {
+    EXPECT_EQ(map.key_images[i].source_frame_index, offline.key_images[i].source_frame_index);
+    EXPECT_EQ(map.key_images[i].t_ns, offline.key_images[i].t_ns);
+    EXPECT_EQ(map.key_images[i].features.lines.size(), offline.key_images[i].features.lines.size());
+    EXPECT_EQ(map.key_images[i].features.corners_px, offline.key_images[i].features.corners_px);
+  }
+  EXPECT_EQ(map.key_images.front().source_frame_index, 0);
+  EXPECT_EQ(map.key_images.back().source_frame_index, static_cast<int64_t>(tour.frames.size()) - 1);
+  EXPECT_EQ(map.camera, tour.camera);
+}
+
+TEST(Teacher, KeyImagesDenserInTheTurn) {
+  const auto& tour = shared_tour();
+  // Frames 0..55 straight (2.5 m / 4.5 cm), 56..74 turn (0.84 m of arc), then straight.
+  constexpr int kTurnBegin = 56, kTurnEnd = 75;
+  const int n = static_cast<int>(tour.frames.size());
+  int in_turn = 0, straight = 0;
+  for (const auto& k : tour.map.key_images) {
+    if (k.source_frame_index == 0 || k.source_frame_index == n - 1) continue;  // forced ones
+    (k.source_frame_index >= kTurnBegin && k.source_frame_index < kTurnEnd ? in_turn : straight)++;
+  }
+  const double turn_density = in_turn / double(kTurnEnd - kTurnBegin);
+  const double straight_density = straight / double(n - (kTurnEnd - kTurnBegin));
+  EXPECT_GE(in_turn, 3);
+  EXPECT_GT(turn_density, 3.0 * straight_density)
+      << in_turn << " key images in the turn, " << straight << " on straight runs";
+  // Count model check: every selection happened on a count below epsilon.
+  for (const TeachStep& s : tour.steps) {
+    if (s.new_key_frame) {
+      EXPECT_LT(s.count, tour.teach_options.selector.epsilon);
+    }
+  }
+}
+
+TEST(Teacher, BadInputs) {
+  const auto& tour = shared_tour();
+  Teacher t(tour.camera);
+  EXPECT_THROW(t.add_frame(Frame{}), std::invalid_argument);
+  t.add_frame(tour.frames[0]);
+  Frame other = tour.frames[1];
+  other.gray = cv::Mat(120, 160, CV_8UC1, cv::Scalar(0));
+  EXPECT_THROW(t.add_frame(other), std::invalid_argument);
+  EXPECT_THROW(t.finish(), std::invalid_argument);  // one frame only
+  TeachOptions bad;
+  bad.selector.epsilon = 0;
+  EXPECT_THROW(Teacher(tour.camera, bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pepper::core::mapping
