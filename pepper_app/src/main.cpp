@@ -17,6 +17,13 @@ int main(int argc, char** argv) {
              "mock:WORLD.yaml (in-process simulated Pepper).");
 
   pepper::app::register_version_command(app);
+  pepper::app::register_perception_demo_command(app);
+  pepper::app::register_map_command(app);
+  pepper::app::register_replay_log_command(app);
+  pepper::app::register_world_command(app);
+  pepper::app::register_doctor_command(app);
+  pepper::app::register_mock_robot_command(app);
+  pepper::app::register_evaluate_command(app);
 
   try {
     app.parse(argc, argv);

@@ -15,5 +15,12 @@ namespace pepper::app {
 int& exit_code();
 
 void register_version_command(CLI::App& app);
+void register_perception_demo_command(CLI::App& app);
+void register_map_command(CLI::App& app);
+void register_replay_log_command(CLI::App& app);
+void register_world_command(CLI::App& app);
+void register_doctor_command(CLI::App& app);
+void register_mock_robot_command(CLI::App& app);
+void register_evaluate_command(CLI::App& app);
 
 }  // namespace pepper::app

@@ -27,6 +27,8 @@ struct KeyImageSelectorOptions {
   /// epsilon of METHOD.md: verified lines (three views) + points (two views) below which a new
   /// key image is taken. >= 1. Default 100 from real Pepper images (docs/method/teach.md):
   /// neighbouring key images of a working QVGA map share 90..146 verified matches (medians).
+  /// Known problem (docs/method/teach.md): on continuous teach drives an absolute threshold gives
+  /// key images too dense to switch through (rendered QVGA: 41 in 2 m with 100).
   int epsilon = 100;
   /// Minimum frame gap between a key image and the next (not in the paper; >= 1, 1 = paper).
   /// Replay needs `consecutive_frames` (2) frames per switch, so key images closer than about

@@ -1,0 +1,36 @@
+#include "commands/cli_util.hpp"
+
+#include <cstdio>
+#include <iostream>
+
+#include "core/camera/intrinsics_io.hpp"
+
+namespace pepper::app {
+
+void ProgressLine::update(std::size_t done, std::size_t total, const std::string& extra) {
+  done_ = done;
+  total_ = total;
+  const auto now = std::chrono::steady_clock::now();
+  if (done != total && now - last_ < std::chrono::milliseconds(500)) return;
+  last_ = now;
+  const double pct = total ? 100.0 * static_cast<double>(done) / static_cast<double>(total) : 0.0;
+  std::fprintf(stderr, "%s: %zu/%zu (%.0f%%)%s%s\n", label_.c_str(), done, total, pct,
+               extra.empty() ? "" : "  ", extra.c_str());
+}
+
+void ProgressLine::finish(const std::string& extra) {
+  std::fprintf(stderr, "%s: done, %zu/%zu%s%s\n", label_.c_str(), done_, total_,
+               extra.empty() ? "" : "  ", extra.c_str());
+}
+
+std::optional<core::CameraIntrinsics> load_camera_option(const std::string& path) {
+  if (path.empty()) return std::nullopt;
+  return core::camera::load_intrinsics(path);
+}
+
+int report_error(const std::string& what) {
+  std::cerr << "pepper_app: error: " << what << "\n";
+  return 1;
+}
+
+}  // namespace pepper::app

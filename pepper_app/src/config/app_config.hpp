@@ -1,0 +1,83 @@
+#pragma once
+// The application's configuration: every parameter of every concern, with the paper's defaults
+// (the core options structs' in-class defaults), loadable from YAML/JSON and overridable on the
+// command line with dotted names: `--set navigator.ibvs.g1=0.6 --set robot.fps=10`.
+//
+// File layout (sections = concerns; `pepper_app config dump` prints the full default file):
+//   features:   extractor (lines, LBD, FAST, ORB, KLT) and matcher (line matching, RANSACs)
+//               — shared by teach and replay, since a map's descriptors must match replay's.
+//   key_images: teach key-image selection (epsilon rule)
+//   navigator:  control laws, velocity schedule, localisation, switching, hold time
+//   robot:      camera request, head lock, safety timeouts, login user
+//   ui:         teach UI port and driving limits
+// Unknown keys and wrong types are errors naming the dotted key and the file; values are then
+// checked by the core's validate() functions before anything moves (STYLE.md 2.5).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/mapping/teacher.hpp"
+#include "core/navigator/navigator.hpp"
+
+namespace pepper::app {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RobotConfig {
+  int camera_width_px = 640;  ///< kVGA; 320x240 (kQVGA) also supported
+  int camera_height_px = 480;
+  int camera_fps = 15;
+  double head_pitch_rad = 0.0;  ///< 0 = optical axis horizontal (METHOD.md assumes it)
+  double head_yaw_rad = 0.0;
+  int watchdog_ms = 300;         ///< bridge stops the base without a fresh command this long
+  int frame_timeout_ms = 1000;   ///< session stops the base when no frame comes this long
+  std::string user;              ///< login user for tcps:// (NAOqi 2.9: "nao"); password never here
+  std::vector<std::string> validate() const;
+};
+
+struct UiConfig {
+  int port = 8080;               ///< 0 = any free port
+  double max_v_m_s = 0.25;       ///< teach driving limits from the keyboard / buttons
+  double max_omega_rad_s = 0.5;
+  std::vector<std::string> validate() const;
+};
+
+struct AppConfig {
+  core::features::FeatureExtractorOptions extractor;
+  core::features::MatcherOptions matcher;
+  core::mapping::KeyImageSelectorOptions key_images;
+  core::navigator::NavigatorOptions navigator;  ///< its extractor/matcher come from the above
+  RobotConfig robot;
+  UiConfig ui;
+
+  core::mapping::TeachOptions teach_options() const;
+  core::navigator::NavigatorOptions navigator_options() const;
+
+  /// Every problem, each naming the dotted key; empty when valid.
+  std::vector<std::string> validate() const;
+};
+
+/// The whole configuration as JSON (every key, enums by name).
+nlohmann::json config_to_json(const AppConfig& config);
+
+/// Applies `tree` over `config` (missing keys keep their value). Unknown keys and wrong types
+/// throw ConfigError naming the dotted key; `origin` (a file name) prefixes the message.
+void apply_config_json(const nlohmann::json& tree, AppConfig& config, const std::string& origin);
+
+/// Reads a YAML or JSON file into a JSON tree. Throws ConfigError naming the file.
+nlohmann::json read_config_file(const std::filesystem::path& file);
+
+/// Parses "dotted.key=value" (value read as a YAML scalar) into a JSON patch tree.
+nlohmann::json parse_override(const std::string& assignment);
+
+/// Defaults, then the file (if not empty), then each override in order; then validate().
+/// Throws ConfigError listing every problem.
+AppConfig load_app_config(const std::filesystem::path& file, const std::vector<std::string>& sets);
+
+}  // namespace pepper::app

@@ -1,0 +1,102 @@
+#include "offline/offline_jobs.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "session/telemetry_json.hpp"
+
+namespace pepper::app {
+
+namespace {
+
+void check_size(const core::Frame& frame, const cv::Size& expected, const Recording& rec,
+                std::size_t i) {
+  if (frame.gray.size() != expected) {
+    throw RecordingError(rec.frames[i].file.string() + ": image is " +
+                         std::to_string(frame.gray.cols) + "x" + std::to_string(frame.gray.rows) +
+                         " but earlier frames are " + std::to_string(expected.width) + "x" +
+                         std::to_string(expected.height));
+  }
+}
+
+core::CameraIntrinsics camera_for(const core::CameraIntrinsics& camera, const cv::Size& size) {
+  if (camera.width_px == size.width && camera.height_px == size.height) return camera;
+  return camera.scaled_to(size.width, size.height);
+}
+
+}  // namespace
+
+core::memory::VisualMemory build_map_from_recording(const Recording& recording,
+                                                    const core::mapping::TeachOptions& options,
+                                                    bool every_frame_key,
+                                                    const std::string& parameters_json,
+                                                    const ProgressFn& progress) {
+  const std::size_t total = recording.frames.size();
+  const core::Frame first = load_frame(recording, 0);
+  const cv::Size size = first.gray.size();
+  const core::CameraIntrinsics camera = camera_for(recording.camera, size);
+
+  if (every_frame_key) {
+    if (total < 2) throw RecordingError(recording.folder.string() + ": a map needs 2+ images");
+    core::features::FeatureExtractor extractor(camera, options.extractor);
+    core::memory::VisualMemory map;
+    map.camera = camera;
+    map.parameters_json = parameters_json;
+    for (std::size_t i = 0; i < total; ++i) {
+      const core::Frame frame = i == 0 ? first : load_frame(recording, i);
+      check_size(frame, size, recording, i);
+      core::memory::KeyImage key;
+      key.source_frame_index = frame.index;
+      key.t_ns = frame.t_ns;
+      key.features = extractor.extract(frame.gray);
+      map.key_images.push_back(std::move(key));
+      if (progress) progress(i + 1, total);
+    }
+    return map;
+  }
+
+  core::mapping::Teacher teacher(camera, options);
+  for (std::size_t i = 0; i < total; ++i) {
+    const core::Frame frame = i == 0 ? first : load_frame(recording, i);
+    check_size(frame, size, recording, i);
+    teacher.add_frame(frame);
+    if (progress) progress(i + 1, total);
+  }
+  return teacher.finish(parameters_json);
+}
+
+nlohmann::json ReplayLogResult::to_json() const {
+  nlohmann::json out;
+  out["summary"] = {{"frames", frames.size()},
+                    {"reached_end", reached_end},
+                    {"max_key_image_reached", max_key_image_reached},
+                    {"key_image_count", key_image_count}};
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& f : frames) {
+    list.push_back({{"frame_index", f.frame_index},
+                    {"command", command_to_json(f.command)},
+                    {"telemetry", telemetry_to_json(f.telemetry)}});
+  }
+  out["frames"] = std::move(list);
+  return out;
+}
+
+ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemory map,
+                           const core::navigator::NavigatorOptions& options,
+                           const ProgressFn& progress) {
+  ReplayLogResult result;
+  result.key_image_count = static_cast<int>(map.key_images.size());
+  core::navigator::Navigator navigator(std::move(map), options);
+  const std::size_t total = recording.frames.size();
+  for (std::size_t i = 0; i < total; ++i) {
+    const core::Frame frame = load_frame(recording, i);
+    const core::navigator::StepResult step = navigator.step(frame);
+    result.max_key_image_reached = std::max(result.max_key_image_reached, step.telemetry.in);
+    if (step.telemetry.state == core::navigator::NavState::kTourComplete) result.reached_end = true;
+    result.frames.push_back({frame.index, step.command, step.telemetry});
+    if (progress) progress(i + 1, total);
+  }
+  return result;
+}
+
+}  // namespace pepper::app

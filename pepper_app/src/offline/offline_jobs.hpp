@@ -1,0 +1,51 @@
+#pragma once
+// Robot-free jobs over recordings: build a map from a recorded teach session (`map build`) and
+// run the navigator over recorded frames to see what it would have commanded (`replay-log`).
+// Frames are streamed from disk one at a time, so long recordings need little memory.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/mapping/teacher.hpp"
+#include "core/memory/visual_memory.hpp"
+#include "core/navigator/navigator.hpp"
+#include "session/recording.hpp"
+
+namespace pepper::app {
+
+/// Called every few frames with (frames done, frames total) for progress display.
+using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
+
+/// Key images by the teach rule (core/mapping) over the recording's frames, or every frame a key
+/// image when `every_frame_key` (maps made elsewhere). Frames whose size differs from the first
+/// frame's are an error naming the file. The camera is scaled to the frames' size when needed.
+core::memory::VisualMemory build_map_from_recording(const Recording& recording,
+                                                    const core::mapping::TeachOptions& options,
+                                                    bool every_frame_key,
+                                                    const std::string& parameters_json,
+                                                    const ProgressFn& progress = {});
+
+struct ReplayLogFrame {
+  int64_t frame_index = 0;
+  core::navigator::Command command;
+  core::navigator::Telemetry telemetry;
+};
+
+struct ReplayLogResult {
+  std::vector<ReplayLogFrame> frames;
+  bool reached_end = false;        ///< the navigator reported the tour complete
+  int max_key_image_reached = -1;  ///< largest IN seen
+  int key_image_count = 0;
+  nlohmann::json to_json() const;  ///< {"summary": {...}, "frames": [...]}
+};
+
+/// Runs a Navigator over the recording's frames (no robot). Throws RecordingError / MapError /
+/// std::invalid_argument (frame size differs from the map's) with a clear message.
+ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemory map,
+                           const core::navigator::NavigatorOptions& options,
+                           const ProgressFn& progress = {});
+
+}  // namespace pepper::app

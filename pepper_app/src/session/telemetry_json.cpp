@@ -1,0 +1,64 @@
+#include "session/telemetry_json.hpp"
+
+#include <cmath>
+
+namespace pepper::app {
+namespace {
+
+nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+}  // namespace
+
+nlohmann::json command_to_json(const core::navigator::Command& c) {
+  return {{"v_m_s", c.v_m_s},
+          {"omega_rad_s", c.omega_rad_s},
+          {"stop", c.stop},
+          {"reason", core::navigator::to_string(c.reason)}};
+}
+
+nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
+  using core::navigator::to_string;
+  return {
+      {"t_ns", t.t_ns},
+      {"frame_index", t.frame_index},
+      {"state", to_string(t.state)},
+      {"reason", to_string(t.reason)},
+      {"ip", t.ip},
+      {"in", t.in},
+      {"inn", t.inn},
+      {"switched", t.switched},
+      {"switch_streak", t.switch_streak},
+      {"n_lines_next", t.n_lines_next},
+      {"n_points_next", t.n_points_next},
+      {"n_lines_next_next", t.n_lines_next_next},
+      {"n_points_next_next", t.n_points_next_next},
+      {"n_prev", t.n_prev},
+      {"n_three_view_next", t.n_three_view_next},
+      {"n_three_view_prev", t.n_three_view_prev},
+      {"next_scale_ratio", num(t.next_scale_ratio)},
+      {"line_err_next", num(t.line_err_next)},
+      {"line_err_next_next", num(t.line_err_next_next)},
+      {"point_err_next", num(t.point_err_next)},
+      {"point_err_next_next", num(t.point_err_next_next)},
+      {"J_L", num(t.J_L)},
+      {"J_P", num(t.J_P)},
+      {"used_lines", t.used_lines},
+      {"used_points", t.used_points},
+      {"vnhv_lateral_m", num(t.vnhv_lateral_m)},
+      {"vnhv_heading_rad", num(t.vnhv_heading_rad)},
+      {"omega_demand_rad_s", num(t.omega_demand_rad_s)},
+      {"turning", t.turning},
+      {"hold_elapsed_ns", t.hold_elapsed_ns},
+      {"localization_ran", t.localization_ran},
+      {"localization_best", t.localization_best},
+      {"localization_best_count", t.localization_best_count},
+      {"timings_ms",
+       {{"extract", t.timings.extract_ms},
+        {"localize", t.timings.localize_ms},
+        {"match", t.timings.match_ms},
+        {"control", t.timings.control_ms},
+        {"total", t.timings.total_ms}}},
+  };
+}
+
+}  // namespace pepper::app

@@ -1,0 +1,99 @@
+// map build and replay-log over a recording made by driving the mock robot along the first
+// metres of a shipped world's tour (QVGA to keep it quick).
+#include "offline/offline_jobs.hpp"
+
+#include <gtest/gtest.h>
+
+#include "naoqi_bridge/mock/mock_bridge.hpp"
+#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "naoqi_bridge/mock/teach_driver.hpp"
+#include "support/temp_dir.hpp"
+
+namespace pepper::app {
+namespace {
+
+namespace mock = naoqi_bridge::mock;
+
+/// Records `frames` frames of the teach drive of `world_file` into `folder`.
+void record_teach(const std::filesystem::path& world_file, const std::filesystem::path& folder,
+                  int frames) {
+  auto world = std::make_shared<const mock::World>(mock::load_world(world_file));
+  mock::MockRobot robot(world);
+  mock::MockBridge bridge(robot);
+  bridge.connect();
+  const core::CameraIntrinsics camera = bridge.start_camera({0, 320, 240, 15});
+  mock::TeachDriver driver(world->scenario);
+  RecordingWriter writer(folder, camera, "mock:" + world_file.string());
+  for (int i = 0; i < frames; ++i) {
+    auto frame = bridge.next_frame(std::chrono::milliseconds(1000));
+    ASSERT_TRUE(frame.has_value());
+    const auto truth = robot.ground_truth();
+    const naoqi_bridge::BaseVelocity cmd =
+        driver.command(truth.base, static_cast<double>(frame->t_ns) * 1e-9);
+    bridge.move(cmd);
+    writer.append(*frame, cmd.v_x_m_s, cmd.omega_rad_s);
+  }
+  bridge.stop();
+}
+
+class OfflineJobsData : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    tmp_ = new test::TempDir("offline-jobs");
+    record_teach(std::filesystem::path(PEPPER_SOURCE_DIR) / "worlds/robotics_room.yaml",
+                 tmp_->path() / "rec", 150);  // 10 s at 15 fps: ~2 m of the loop
+  }
+  static void TearDownTestSuite() { delete tmp_; }
+  static test::TempDir* tmp_;
+};
+test::TempDir* OfflineJobsData::tmp_ = nullptr;
+
+TEST_F(OfflineJobsData, MapBuildThenReplayLogOfTheSameFramesReachesTheEnd) {
+  const Recording rec = read_recording(tmp_->path() / "rec", std::nullopt);
+  ASSERT_EQ(rec.frames.size(), 150u);
+  std::size_t last_progress = 0;
+  // epsilon pinned to 60: with the default (100) an absolute threshold makes key images so dense
+  // on this continuous drive (41 in 150 frames) that replay cannot switch through them; that
+  // known core problem is measured in docs/method/teach.md. This test is about the offline jobs.
+  core::mapping::TeachOptions teach;
+  teach.selector.epsilon = 60;
+  const auto map = build_map_from_recording(rec, teach, false, "{}",
+                                            [&](std::size_t done, std::size_t) { last_progress = done; });
+  EXPECT_EQ(last_progress, 150u);
+  ASSERT_GE(map.key_images.size(), 2u);
+  EXPECT_EQ(map.key_images.front().source_frame_index, 0);
+  EXPECT_EQ(map.key_images.back().source_frame_index, 149);  // the last image is always stored
+  EXPECT_LT(map.key_images.size(), 150u);                      // but not every frame
+
+  core::memory::save_map(map, tmp_->path() / "map");
+  auto loaded = core::memory::load_map(tmp_->path() / "map");
+  const ReplayLogResult result = replay_log(rec, std::move(loaded), {});
+  ASSERT_EQ(result.frames.size(), 150u);
+  // Replaying the taught frames themselves: the navigator must walk the key images in order
+  // and recognise the final image.
+  int previous_in = -1;
+  for (const auto& f : result.frames) {
+    if (f.telemetry.in >= 0) {
+      EXPECT_GE(f.telemetry.in, previous_in) << "IN went backwards at frame " << f.frame_index;
+      previous_in = f.telemetry.in;
+    }
+  }
+  EXPECT_EQ(result.max_key_image_reached, static_cast<int>(map.key_images.size()) - 1);
+  EXPECT_TRUE(result.reached_end);
+  EXPECT_TRUE(result.frames.back().command.stop);
+  const auto json = result.to_json();
+  EXPECT_EQ(json["summary"]["frames"], 150);
+  EXPECT_EQ(json["frames"].size(), 150u);
+}
+
+TEST_F(OfflineJobsData, EveryFrameKeyTakesAllImages) {
+  const Recording rec = read_recording(tmp_->path() / "rec", std::nullopt);
+  Recording first_ten = rec;
+  first_ten.frames.resize(10);
+  const auto map = build_map_from_recording(first_ten, {}, true, "{}");
+  ASSERT_EQ(map.key_images.size(), 10u);
+  EXPECT_GT(map.key_images[3].features.lines.size(), 0u);
+}
+
+}  // namespace
+}  // namespace pepper::app
