@@ -1,0 +1,178 @@
+#pragma once
+// Closed-loop evaluation of teach and replay on the mock robot (docs/evaluation.md; issue 4):
+// teach a world's tour (TeachDriver on ground truth, core::mapping::Teacher picks key images,
+// the map is saved and loaded back), then replay it with core::navigator::Navigator from N
+// perturbed starts, possibly with disturbances (disturbance.hpp), and measure how well the
+// taught path is followed.
+//
+// Definitions (the numbers are options, defaults documented below):
+//  - taught path: the ground-truth base positions of the teach drive, one per frame;
+//  - lateral deviation: signed distance of the replayed base position from the taught path
+//    (metrics.hpp, > 0 left), followed along the path by a PathTracker;
+//  - converged: samples after `converged_after_m` of travelled distance and after |lateral|
+//    first fell below `converged_below_m`;
+//  - success: the navigator reported kTourComplete, the robot stopped within
+//    `end_tolerance_m` of the taught end position, and it never collided, never stayed lost
+//    (no command) longer than `lost_timeout_s`, never left the path by more than
+//    `divergence_m`, and finished before the time limit.
+// Timings: the navigator step is timed with std::chrono::steady_clock (wall clock, evaluation
+// only); everything else is simulated time. Deterministic in (world, options) except timings.
+// Errors: invalid options throw std::invalid_argument naming the field; world, map and
+// navigator exceptions propagate. Not thread-safe.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/control/ibvs_law.hpp"
+#include "core/memory/visual_memory.hpp"
+#include "core/navigator/navigator.hpp"
+#include "evaluation/disturbance.hpp"
+#include "naoqi_bridge/mock/world.hpp"
+
+namespace pepper::app::evaluation {
+
+struct EvaluationOptions {
+  int starts = 10;                  ///< replay runs, >= 1
+  uint64_t seed = 1;                ///< start perturbations, disturbances, noise
+  int width_px = 640;               ///< camera size (VGA; 320x240 for quick runs)
+  int height_px = 480;
+  core::control::FeatureMode features = core::control::FeatureMode::kLinesAndPoints;
+  core::navigator::ControllerKind controller = core::navigator::ControllerKind::kIbvs;
+  /// Start perturbations (uniform, +-): replaces the world's own ranges. The start of run k is
+  /// world.scenario.replay_start(k, seed') with these ranges; a start whose 0.3 m footprint
+  /// touches an obstacle is redrawn (next seed').
+  double perturb_lateral_m = 0.3;
+  double perturb_yaw_deg = 10.0;
+  double perturb_along_m = -1.0;    ///< < 0: the world's own range
+  std::set<Disturbance> disturbances;
+  DisturbanceOptions disturbance;
+  /// Converged part of a run (deviation statistics): after converged_after_m of travelled
+  /// distance AND once |lateral| has fallen below converged_below_m (0: distance rule alone).
+  /// A run that completes the tour without ever converging fails ("not_converged").
+  double converged_after_m = 1.5;
+  double converged_below_m = 0.05;
+  double end_tolerance_m = 0.3;     ///< success: final base position within this of the end
+  double lost_timeout_s = 5.0;      ///< stopped without a command this long: lost (failure)
+  double divergence_m = 1.0;        ///< |lateral| beyond this ends the run (failure)
+  /// Time limit per run: time_limit_factor x (taught path length / 0.08 m/s) + 20 s.
+  double time_limit_factor = 1.5;
+  std::filesystem::path map_dir;    ///< where the taught map is saved (empty: a temp folder)
+  core::navigator::NavigatorOptions navigator;  ///< features/controller fields are overridden
+
+  std::vector<std::string> validate() const;
+};
+
+/// The teach drive and its map.
+struct TeachResult {
+  std::string world_name;
+  core::memory::VisualMemory map;            ///< as loaded back from map_dir
+  std::filesystem::path map_dir;
+  std::vector<Eigen::Vector2d> path_m;       ///< ground-truth base positions, one per frame
+  std::vector<int64_t> key_frames;           ///< teach frame numbers of the key images
+  double length_m = 0.0;                     ///< length of path_m
+  int frames = 0;
+  double wall_s = 0.0;                       ///< wall-clock time of the teach
+};
+
+/// One frame of a replay run.
+struct RunSample {
+  double t_s = 0.0;           ///< simulated time since the run started
+  double x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;  ///< ground truth (world frame)
+  double travelled_m = 0.0;   ///< distance driven since the start
+  double s_m = 0.0;           ///< progress along the taught path
+  double lateral_m = 0.0;     ///< signed deviation from the taught path
+  double v_m_s = 0.0, omega_rad_s = 0.0;  ///< command sent (0 when stopped)
+  bool frame_received = true; ///< false: dropped by the WiFi model (no navigator step)
+  int n_lines = 0, n_points = 0;  ///< verified matches with IN
+  int key_next = -1;          ///< IN
+  double step_ms = 0.0;       ///< wall-clock navigator step (NaN when no frame)
+};
+
+struct RunResult {
+  int index = 0;
+  double start_x_m = 0.0, start_y_m = 0.0, start_yaw_rad = 0.0;
+  double start_lateral_m = 0.0;  ///< of the start, from the taught path
+  bool success = false;
+  std::string outcome;        ///< complete, collision, lost, diverged, timeout, wrong_end
+  std::string detail;         ///< e.g. what was hit
+  bool tour_complete = false;
+  double travelled_m = 0.0;
+  double lateral_rms_m = 0.0;  ///< converged part
+  double lateral_max_m = 0.0;  ///< converged part
+  double converged_from_m = -1.0;  ///< travelled distance where the converged part starts
+  double first_under_5cm_m = -1.0;
+  double final_error_m = 0.0;  ///< final base position to the taught end
+  double omega_rate_rms_rad_s2 = 0.0;
+  double step_ms_median = 0.0, step_ms_p95 = 0.0;
+  int frames = 0;
+  int frames_dropped = 0;
+  int lost_frames = 0;         ///< frames with a stop command after the first localisation
+  double sim_s = 0.0;
+  double wall_s = 0.0;
+  std::vector<RunSample> samples;
+};
+
+struct Summary {
+  int runs = 0;
+  int successes = 0;
+  double success_rate = 0.0;
+  double lateral_rms_m = 0.0;    ///< mean over runs of the per-run RMS (runs with samples)
+  double lateral_max_m = 0.0;    ///< max over runs of the per-run max
+  double final_error_mean_m = 0.0;
+  double final_error_max_m = 0.0;
+  double key_images_per_m = 0.0;
+  double converged_from_max_m = 0.0;   ///< max over runs of converged_from_m (NaN if one never did)
+  double omega_rate_rms_rad_s2 = 0.0;  ///< mean over runs
+  double step_ms_median = 0.0;   ///< over all frames of all runs
+  double step_ms_p95 = 0.0;
+};
+
+struct Evaluation {
+  std::string world_name;
+  std::string features;      ///< "lines+points", "lines", "points"
+  std::string controller;    ///< "ibvs", "vnhv"
+  std::string size;          ///< "640x480"
+  std::vector<std::string> disturbances;
+  std::vector<std::string> disturbance_notes;
+  int key_images = 0;
+  double taught_length_m = 0.0;
+  int teach_frames = 0;
+  std::vector<RunResult> runs;
+  Summary summary;
+};
+
+/// Progress lines ("start 3/10: ...") go through this callback (may be empty).
+using ProgressFn = std::function<void(const std::string&)>;
+
+/// Teaches the world's tour at the options' image size, saves the map to options.map_dir (or a
+/// temporary folder) and loads it back.
+TeachResult teach_tour(const std::shared_ptr<const naoqi_bridge::mock::World>& world,
+                       const EvaluationOptions& options, const ProgressFn& progress = {});
+
+/// Start pose of run k (perturbed, collision-free; see EvaluationOptions).
+naoqi_bridge::mock::Pose2D replay_start_pose(const naoqi_bridge::mock::World& world, int k,
+                                             const EvaluationOptions& options);
+
+/// One replay from `start` in `replay_world` (possibly disturbed), lighting `lighting`.
+RunResult replay_run(const TeachResult& teach,
+                     const std::shared_ptr<const naoqi_bridge::mock::World>& replay_world,
+                     const std::string& lighting, const naoqi_bridge::mock::Pose2D& start, int k,
+                     const EvaluationOptions& options);
+
+/// All replays of one configuration on a taught map, with summary.
+Evaluation evaluate(const TeachResult& teach,
+                    const std::shared_ptr<const naoqi_bridge::mock::World>& world,
+                    const EvaluationOptions& options, const ProgressFn& progress = {});
+
+Summary summarize(const std::vector<RunResult>& runs, int key_images, double taught_length_m);
+
+const char* feature_label(core::control::FeatureMode mode);
+
+}  // namespace pepper::app::evaluation

@@ -1,0 +1,264 @@
+#include "evaluation/disturbance.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include "evaluation/metrics.hpp"
+
+namespace pepper::app::evaluation {
+namespace {
+
+namespace mock = naoqi_bridge::mock;
+constexpr double kDeg = M_PI / 180.0;
+
+/// Distance from p to an oriented rectangle (0 inside).
+double distance_to_rect(const Eigen::Vector2d& p, const Eigen::Vector2d& c,
+                        const Eigen::Vector2d& half, double yaw) {
+  const Eigen::Vector2d d = p - c;
+  const double lx = std::cos(yaw) * d.x() + std::sin(yaw) * d.y();
+  const double ly = -std::sin(yaw) * d.x() + std::cos(yaw) * d.y();
+  const double ex = std::max(std::abs(lx) - half.x(), 0.0);
+  const double ey = std::max(std::abs(ly) - half.y(), 0.0);
+  return std::hypot(ex, ey);
+}
+
+/// The path resampled every 5 cm (clearance checks).
+std::vector<Eigen::Vector2d> sample_path(const std::vector<Eigen::Vector2d>& path) {
+  std::vector<Eigen::Vector2d> out;
+  if (path.size() < 2) return path;
+  const Polyline pl(path);
+  for (double s = 0.0; s <= pl.length_m(); s += 0.05) out.push_back(pl.at(s));
+  out.push_back(pl.at(pl.length_m()));
+  return out;
+}
+
+double clearance(const std::vector<Eigen::Vector2d>& samples, const Eigen::Vector2d& c,
+                 const Eigen::Vector2d& half, double yaw) {
+  double m = std::numeric_limits<double>::infinity();
+  for (const auto& p : samples) m = std::min(m, distance_to_rect(p, c, half, yaw));
+  return m;
+}
+
+Eigen::Vector2d vec2(const YAML::Node& n) { return {n[0].as<double>(), n[1].as<double>()}; }
+
+YAML::Node flow_pair(double a, double b) {
+  YAML::Node n(YAML::NodeType::Sequence);
+  n.push_back(a);
+  n.push_back(b);
+  n.SetStyle(YAML::EmitterStyle::Flow);
+  return n;
+}
+
+/// Moves every box and table of the YAML tree (see DisturbanceOptions).
+void move_furniture(YAML::Node root, const std::vector<Eigen::Vector2d>& samples,
+                    const DisturbanceOptions& o, std::mt19937_64& rng,
+                    std::vector<std::string>& notes) {
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  for (const char* list : {"boxes", "tables"}) {
+    YAML::Node items = root[list];
+    if (!items || !items.IsSequence()) continue;
+    for (size_t i = 0; i < items.size(); ++i) {
+      YAML::Node item = items[i];
+      const std::string name = item["name"] ? item["name"].as<std::string>()
+                                            : std::string(list) + "[" + std::to_string(i) + "]";
+      const Eigen::Vector2d c = vec2(item["center"]);
+      const Eigen::Vector2d half = 0.5 * vec2(item["size_m"]);
+      const double yaw = (item["yaw_deg"] ? item["yaw_deg"].as<double>() : 0.0) * kDeg;
+      const double dir = 2.0 * M_PI * u01(rng);
+      const double len = o.furniture_shift_m * (0.5 + 0.5 * u01(rng));
+      const double dyaw = o.furniture_yaw_deg * kDeg * (2.0 * u01(rng) - 1.0);
+      const bool collides = (!item["collide"] || item["collide"].as<bool>()) &&
+                            (!item["z_m"] || item["z_m"].as<double>() < 1.2);
+      const double before = clearance(samples, c, half, yaw);
+      double scale = 1.0;
+      for (; scale > 0.2; scale *= 0.5) {
+        const Eigen::Vector2d c2 = c + scale * len * Eigen::Vector2d(std::cos(dir), std::sin(dir));
+        const double after = clearance(samples, c2, half, yaw + scale * dyaw);
+        if (!collides || after >= std::min(before, o.min_path_clearance_m)) break;
+      }
+      if (scale <= 0.2) {
+        notes.push_back("kept " + name + " in place (a move would block the taught path)");
+        continue;
+      }
+      const Eigen::Vector2d c2 = c + scale * len * Eigen::Vector2d(std::cos(dir), std::sin(dir));
+      item["center"] = flow_pair(c2.x(), c2.y());
+      item["yaw_deg"] = (yaw + scale * dyaw) / kDeg;
+      std::ostringstream os;
+      os.precision(2);
+      os << std::fixed << "moved " << name << " by " << scale * len << " m, turned by "
+         << scale * dyaw / kDeg << " deg";
+      notes.push_back(os.str());
+    }
+  }
+}
+
+/// Adds a person walking beside the middle of the taught path; returns false if no free side.
+bool add_person(YAML::Node root, const mock::World& world,
+                const std::vector<Eigen::Vector2d>& path, const DisturbanceOptions& o,
+                std::vector<std::string>& notes) {
+  if (path.size() < 2) return false;
+  const Polyline pl(path);
+  const double s0 = 0.25 * pl.length_m(), s1 = 0.65 * pl.length_m();
+  for (double offset : {o.person_offset_m, -o.person_offset_m, 0.85 * o.person_offset_m,
+                        -0.85 * o.person_offset_m, 1.2 * o.person_offset_m,
+                        -1.2 * o.person_offset_m}) {
+    std::vector<Eigen::Vector2d> walk;
+    bool free = true;
+    for (double s = s0; s <= s1 + 1e-9 && free; s += 0.05) {
+      const Eigen::Vector2d p = pl.at(s);
+      // Direction smoothed over +-0.4 m: the walk rounds the outside of a corner.
+      const Eigen::Vector2d ahead = pl.at(std::min(s + 0.4, pl.length_m()));
+      const Eigen::Vector2d behind = pl.at(std::max(s - 0.4, 0.0));
+      Eigen::Vector2d t = ahead - behind;
+      if (t.norm() < 1e-9) continue;
+      t.normalize();
+      const Eigen::Vector2d q = p + offset * Eigen::Vector2d(-t.y(), t.x());
+      // 0.3 m: the person's half-diagonal (0.45 x 0.3 m) plus a little. On the inside of a turn
+      // the offset curve folds back across the path: every point must stay ~offset away from
+      // the whole path, not only from its own foot point.
+      if (world.collision(q, 0.3, 0.0)) free = false;
+      if (pl.project(q).distance_m < 0.9 * std::abs(offset)) free = false;
+      walk.push_back(q);
+    }
+    if (!free || walk.size() < 2) continue;
+    // Every 5 cm sample is a vertex: coarser chords would cut the outside of a turn.
+    YAML::Node pts(YAML::NodeType::Sequence);
+    for (const auto& q : walk) pts.push_back(flow_pair(q.x(), q.y()));
+    YAML::Node person;
+    person["name"] = "evaluation_person";
+    person["path"] = pts;
+    person["speed_m_s"] = o.person_speed_m_s;
+    person["texture"] = "evaluation_person";
+    root["textures"]["evaluation_person"]["type"] = "noise";
+    root["textures"]["evaluation_person"]["mean"] = 70;
+    root["textures"]["evaluation_person"]["contrast"] = 30;
+    root["textures"]["evaluation_person"]["feature_px"] = 24;
+    root["textures"]["evaluation_person"]["seed"] = 4242;
+    root["people"].push_back(person);
+    std::ostringstream os;
+    os.precision(2);
+    os << std::fixed << "person walking " << (s1 - s0) << " m beside the path at "
+       << (offset > 0 ? "left " : "right ") << std::abs(offset) << " m, " << o.person_speed_m_s
+       << " m/s";
+    notes.push_back(os.str());
+    return true;
+  }
+  notes.push_back("no free side of the path for a walking person: not added");
+  return false;
+}
+
+}  // namespace
+
+const char* to_string(Disturbance d) {
+  switch (d) {
+    case Disturbance::kLight: return "light";
+    case Disturbance::kFurniture: return "furniture";
+    case Disturbance::kPerson: return "person";
+    case Disturbance::kDrops: return "drops";
+    case Disturbance::kLatency: return "latency";
+  }
+  return "?";
+}
+
+Disturbance parse_disturbance(const std::string& name) {
+  for (Disturbance d : {Disturbance::kLight, Disturbance::kFurniture, Disturbance::kPerson,
+                        Disturbance::kDrops, Disturbance::kLatency}) {
+    if (name == to_string(d)) return d;
+  }
+  throw std::invalid_argument("unknown disturbance '" + name +
+                              "' (light, furniture, person, drops, latency, none)");
+}
+
+std::vector<std::string> DisturbanceOptions::validate() const {
+  std::vector<std::string> e;
+  auto range = [&](const char* n, double v, double lo, double hi) {
+    if (!(v >= lo && v <= hi)) {
+      std::ostringstream os;
+      os << "disturbance." << n << " = " << v << ": must be in [" << lo << ", " << hi << "]";
+      e.push_back(os.str());
+    }
+  };
+  if (light_factor != 0.0) range("light_factor", light_factor, 0.2, 3.0);
+  range("furniture_shift_m", furniture_shift_m, 0.0, 2.0);
+  range("furniture_yaw_deg", furniture_yaw_deg, 0.0, 90.0);
+  range("min_path_clearance_m", min_path_clearance_m, 0.0, 2.0);
+  range("person_offset_m", person_offset_m, 0.3, 3.0);
+  range("person_speed_m_s", person_speed_m_s, 0.0, 2.0);
+  range("drop_probability", drop_probability, 0.0, 0.9);
+  range("latency_s", latency_s, 0.0, 2.0);
+  return e;
+}
+
+DisturbedWorld make_disturbed_world(const std::shared_ptr<const mock::World>& world,
+                                    const std::set<Disturbance>& disturbances,
+                                    const DisturbanceOptions& options,
+                                    const std::vector<Eigen::Vector2d>& taught_path_m,
+                                    uint64_t seed) {
+  if (const auto errors = options.validate(); !errors.empty()) {
+    throw std::invalid_argument(errors.front());
+  }
+  DisturbedWorld out;
+  out.world = world;
+  const bool yaml_level =
+      disturbances.count(Disturbance::kFurniture) || disturbances.count(Disturbance::kPerson);
+  if (yaml_level) {
+    if (world->source.empty()) {
+      throw std::invalid_argument(
+          "furniture/person disturbances need a world loaded from a file (World::source)");
+    }
+    YAML::Node root = YAML::LoadFile(world->source.string());
+    std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 17);
+    if (disturbances.count(Disturbance::kFurniture)) {
+      move_furniture(root, sample_path(taught_path_m), options, rng, out.notes);
+    }
+    if (disturbances.count(Disturbance::kPerson)) {
+      add_person(root, *world, taught_path_m, options, out.notes);
+    }
+    YAML::Emitter em;
+    em << root;
+    auto w = mock::parse_world(em.c_str(), world->source.string() + " (disturbed)",
+                               world->source.parent_path());
+    w.source = world->source;
+    out.world = std::make_shared<const mock::World>(std::move(w));
+  }
+  if (disturbances.count(Disturbance::kLight)) {
+    if (options.light_factor == 0.0) {
+      out.lighting = "replay";
+      const auto& l = out.world->light("replay");
+      std::ostringstream os;
+      os << "world's replay lighting: ambient x" << l.ambient << ", windows x" << l.windows
+         << ", lamps x" << l.lamps;
+      out.notes.push_back(os.str());
+    } else {
+      auto w = std::make_shared<mock::World>(*out.world);
+      mock::LightingCondition l = w->light("teach");
+      l.ambient *= options.light_factor;
+      l.windows *= options.light_factor;
+      l.lamps *= options.light_factor;
+      w->lighting["evaluation"] = l;
+      out.world = w;
+      out.lighting = "evaluation";
+      std::ostringstream os;
+      os << "every light x" << options.light_factor;
+      out.notes.push_back(os.str());
+    }
+  }
+  if (disturbances.count(Disturbance::kDrops)) {
+    std::ostringstream os;
+    os << "WiFi frame drops p = " << options.drop_probability;
+    out.notes.push_back(os.str());
+  }
+  if (disturbances.count(Disturbance::kLatency)) {
+    std::ostringstream os;
+    os << "command latency " << options.latency_s << " s";
+    out.notes.push_back(os.str());
+  }
+  return out;
+}
+
+}  // namespace pepper::app::evaluation

@@ -1,0 +1,71 @@
+#pragma once
+// Disturbances applied between teach and replay in the closed-loop evaluation
+// (docs/evaluation.md): a light change, moved furniture, a walking person, WiFi frame drops and
+// command latency. The first three change the world the replay sees; the last two change the
+// robot (MockBridge WiFi options, kinematics latency).
+//
+// A World is immutable and shared; a disturbed world is a new World built from the same YAML
+// file with the changes applied to the YAML tree (boxes and tables moved, a person added) and
+// re-parsed by mock::parse_world, or a copy with one more lighting condition. Furniture moves
+// and the person's walk are checked against the taught path so that they never block it: an
+// item whose move would bring it closer than `min_path_clearance_m` to the path (and closer than
+// it was) is moved less (half, then not at all).
+// Deterministic in the seed. Failure: a world without a source file cannot take YAML-level
+// disturbances (std::invalid_argument); YAML or world errors propagate (mock::WorldError).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "naoqi_bridge/mock/world.hpp"
+
+namespace pepper::app::evaluation {
+
+enum class Disturbance { kLight, kFurniture, kPerson, kDrops, kLatency };
+
+const char* to_string(Disturbance d);
+/// "light", "furniture", "person", "drops", "latency"; throws std::invalid_argument otherwise.
+Disturbance parse_disturbance(const std::string& name);
+
+struct DisturbanceOptions {
+  /// Light: 0 uses the world's "replay" lighting condition; otherwise every light group of the
+  /// "teach" condition is multiplied by this factor, in [0.2, 3] (targets: 0.6 .. 1.4).
+  double light_factor = 0.0;
+  /// Furniture: each box and table moves by a seeded random vector of length in
+  /// [0.5, 1] x furniture_shift_m and turns by up to +-furniture_yaw_deg. >= 0.
+  double furniture_shift_m = 0.25;
+  double furniture_yaw_deg = 10.0;
+  /// Clearance kept between moved furniture (footprint) and the taught path, m, >= 0.
+  /// 0.3 m robot radius + 0.15 m margin for replay deviations.
+  double min_path_clearance_m = 0.45;
+  /// Person: walks back and forth beside the middle part of the taught path (from 25 % to 65 %
+  /// of its length), person_offset_m to its side (the first side/offset that is free), m/s.
+  double person_offset_m = 0.8;
+  double person_speed_m_s = 0.6;
+  /// Frame drops: probability that a captured frame is lost on the WiFi link, [0, 0.9].
+  double drop_probability = 0.15;
+  /// Latency: command reception to actuation, s, [0, 2].
+  double latency_s = 0.2;
+
+  std::vector<std::string> validate() const;
+};
+
+/// What was changed, for the report.
+struct DisturbedWorld {
+  std::shared_ptr<const naoqi_bridge::mock::World> world;
+  std::string lighting = "teach";  ///< condition the replay robot must use
+  std::vector<std::string> notes;  ///< one line per change ("moved table_1 by 0.21 m", ...)
+};
+
+/// The world the replay sees. `taught_path_m` is the path to keep clear (ground truth of the
+/// teach drive, or the waypoints). Only kLight, kFurniture and kPerson change the world.
+DisturbedWorld make_disturbed_world(const std::shared_ptr<const naoqi_bridge::mock::World>& world,
+                                    const std::set<Disturbance>& disturbances,
+                                    const DisturbanceOptions& options,
+                                    const std::vector<Eigen::Vector2d>& taught_path_m,
+                                    uint64_t seed);
+
+}  // namespace pepper::app::evaluation
