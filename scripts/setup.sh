@@ -13,8 +13,12 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev
   clang libclang-rt-14-dev
-  chromium nodejs npm
+  chromium
 )
+# node and npm: this image may already ship them outside Debian's packaging (then Debian's npm
+# package conflicts); install Debian's only when the commands are missing.
+if ! command -v node >/dev/null 2>&1; then PACKAGES+=(nodejs); fi
+if ! command -v npm >/dev/null 2>&1; then PACKAGES+=(npm); fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
