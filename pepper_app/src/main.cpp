@@ -24,6 +24,10 @@ int main(int argc, char** argv) {
   pepper::app::register_doctor_command(app);
   pepper::app::register_mock_robot_command(app);
   pepper::app::register_evaluate_command(app);
+  pepper::app::register_teach_command(app);
+  pepper::app::register_replay_command(app);
+  pepper::app::register_demo_command(app);
+  pepper::app::register_config_command(app);
 
   try {
     app.parse(argc, argv);

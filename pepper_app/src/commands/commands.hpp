@@ -22,5 +22,9 @@ void register_world_command(CLI::App& app);
 void register_doctor_command(CLI::App& app);
 void register_mock_robot_command(CLI::App& app);
 void register_evaluate_command(CLI::App& app);
+void register_teach_command(CLI::App& app);
+void register_replay_command(CLI::App& app);
+void register_demo_command(CLI::App& app);
+void register_config_command(CLI::App& app);
 
 }  // namespace pepper::app

@@ -1,0 +1,117 @@
+// `pepper_app replay --robot URL --map DIR`: drive a taught tour again by itself.
+// See pepper_app/src/session/replay_session.hpp and docs/user_guide.md.
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "commands/cli_util.hpp"
+#include "commands/commands.hpp"
+#include "core/memory/visual_memory.hpp"
+#include "naoqi_bridge/mock/world.hpp"
+#include "session/replay_session.hpp"
+#include "session/session_cli.hpp"
+#include "session/signals.hpp"
+#include "teach_ui/ui_server.hpp"
+
+namespace pepper::app {
+namespace {
+
+struct ReplayArgs {
+  CommonSessionArgs common;
+  std::string map;
+  std::string record;
+  std::string json_out;
+  int64_t max_frames = 0;
+  int mock_start = -1;
+  uint64_t seed = 1;
+  bool wait_start = false;
+  std::string mock_command_log;
+};
+
+int run_replay(const ReplayArgs& a) {
+  try {
+    const AppConfig config = load_session_config(a.common);
+    core::memory::VisualMemory map = core::memory::load_map(a.map);
+    RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
+    ReplaySessionOptions o;
+    o.camera = camera_request(config);
+    o.head = head_request(config);
+    o.navigator = config.navigator_options();
+    o.frame_timeout_ms = config.robot.frame_timeout_ms;
+    o.max_frames = a.max_frames;
+    o.telemetry_jsonl = a.json_out;
+    o.record_dir = a.record;
+    o.wait_for_start = a.wait_start;
+    o.config_json = config_to_json(config).dump();
+    const bool ui_wanted = a.common.ui || a.common.ui_port >= 0;
+    if (robot.mock && ui_wanted) o.pace_hz = config.robot.camera_fps;
+    if (robot.mock && a.mock_start >= 0) {
+      const auto& sc = robot.mock->world().scenario;
+      robot.mock->place(sc.replay_start(static_cast<size_t>(a.mock_start), a.seed));
+      robot.mock->set_lighting("replay");
+    }
+    {
+      const auto problems = o.validate();
+      if (!problems.empty()) {
+        for (const auto& p : problems) std::cerr << "pepper_app replay: " << p << "\n";
+        return 2;
+      }
+    }
+    install_interrupt_handlers();
+    auto ui = start_session_ui(a.common, config);
+    SessionLink link(ui.get(), &std::cout);
+    std::cerr << "replay: " << map.key_images.size() << " key images from " << a.map << " on "
+              << robot.bridge->describe() << "; Ctrl-C (or STOP in the UI) stops the robot\n";
+    const ReplayResult r = run_replay_session(robot, std::move(map), o, link);
+    if (!a.mock_command_log.empty() && robot.mock) {
+      std::ofstream out(a.mock_command_log);
+      for (const auto& c : robot.mock->command_log()) {
+        out << nlohmann::json{{"t_ns", c.t_ns},
+                              {"v_x_m_s", c.velocity.v_x_m_s},
+                              {"omega_rad_s", c.velocity.omega_rad_s},
+                              {"stop_move", c.stop_move}}
+                   .dump()
+            << "\n";
+      }
+    }
+    std::cerr << "replay " << r.outcome << ": " << r.frames << " frames, furthest key image "
+              << r.max_key_reached << " of " << r.key_image_count - 1 << "\n";
+    if (!r.error.empty()) return report_error(r.error);
+    if (r.outcome == "interrupted") return 130;
+    return r.tour_complete ? 0 : 1;
+  } catch (const std::exception& e) {
+    return report_error(e.what());
+  }
+}
+
+}  // namespace
+
+void register_replay_command(CLI::App& app) {
+  auto args = std::make_shared<ReplayArgs>();
+  auto* cmd = app.add_subcommand(
+      "replay",
+      "Replay a taught tour: localise in the map, then servo along the key images until the end\n"
+      "of the tour. The robot stops whenever the navigator is unsure, frames stall, the\n"
+      "connection is lost, on Ctrl-C and on the UI's STOP. Exit code 0 when the end was reached.");
+  add_common_session_options(cmd, args->common, true);
+  cmd->add_option("--map", args->map, "Map folder (from `teach` or `map build`)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--record", args->record, "Also record the replay's frames in this folder");
+  cmd->add_option("--json", args->json_out, "Write per-frame command + telemetry as JSON lines");
+  cmd->add_option("--max-frames", args->max_frames, "Stop after this many frames")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--mock-start", args->mock_start,
+                  "mock: robots: start from the world's replay start K (perturbed by --seed)");
+  cmd->add_option("--seed", args->seed, "Perturbation seed for --mock-start (0 = unperturbed)");
+  cmd->add_flag("--wait-start", args->wait_start, "Wait for the UI's start-replay button");
+  cmd->add_option("--mock-command-log", args->mock_command_log,
+                  "mock: robots: write every base command received as JSON lines here");
+  cmd->footer(
+      "Examples:\n"
+      "  pepper_app replay --robot tcp://10.0.0.5 --map maps/lab --ui --json lab_run1.jsonl\n"
+      "  pepper_app replay --robot mock:worlds/robotics_room.yaml --map /tmp/room --mock-start 0");
+  cmd->callback([args] { exit_code() = run_replay(*args); });
+}
+
+}  // namespace pepper::app

@@ -1,0 +1,139 @@
+// `pepper_app teach --robot URL --map DIR`: teach a tour (record frames, pick key images online,
+// save the map). See pepper_app/src/session/teach_session.hpp and docs/user_guide.md.
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "commands/cli_util.hpp"
+#include "commands/commands.hpp"
+#include "session/session_cli.hpp"
+#include "session/signals.hpp"
+#include "session/teach_session.hpp"
+#include "teach_ui/ui_server.hpp"
+
+namespace pepper::app {
+namespace {
+
+struct TeachArgs {
+  CommonSessionArgs common;
+  std::string map;
+  std::string recording;
+  bool scripted = false;
+  bool manual = false;
+  double max_distance_m = 0.0;
+  int64_t max_frames = 0;
+  std::string mock_command_log;
+};
+
+std::filesystem::path free_recording_dir(const std::filesystem::path& map) {
+  std::filesystem::path base = map;
+  base += ".recording";
+  std::filesystem::path p = base;
+  for (int i = 1; std::filesystem::exists(p) && !std::filesystem::is_empty(p); ++i) {
+    p = base;
+    p += "." + std::to_string(i);
+  }
+  return p;
+}
+
+/// Writes the simulated robot's command log as JSON lines (tests assert on the last command).
+void write_command_log(const RobotConnection& robot, const std::string& file) {
+  if (file.empty() || !robot.mock) return;
+  std::ofstream out(file);
+  for (const auto& c : robot.mock->command_log()) {
+    out << nlohmann::json{{"t_ns", c.t_ns},
+                          {"v_x_m_s", c.velocity.v_x_m_s},
+                          {"omega_rad_s", c.velocity.omega_rad_s},
+                          {"stop_move", c.stop_move}}
+               .dump()
+        << "\n";
+  }
+}
+
+int run_teach(const TeachArgs& a) {
+  try {
+    const AppConfig config = load_session_config(a.common);
+    RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
+    if (a.scripted && a.manual) return report_error("--scripted and --manual exclude each other");
+    TeachSessionOptions o;
+    o.map_dir = a.map;
+    o.recording_dir =
+        a.recording.empty() ? free_recording_dir(a.map) : std::filesystem::path(a.recording);
+    o.camera = camera_request(config);
+    o.head = head_request(config);
+    o.teach = config.teach_options();
+    o.config_json = config_to_json(config).dump();
+    const bool ui_wanted = a.common.ui || a.common.ui_port >= 0;
+    o.scripted = a.scripted || (robot.mock && !a.manual && !ui_wanted);
+    o.max_distance_m = a.max_distance_m;
+    o.max_frames = a.max_frames;
+    o.frame_timeout_ms = config.robot.frame_timeout_ms;
+    o.max_v_m_s = config.ui.max_v_m_s;
+    o.max_omega_rad_s = config.ui.max_omega_rad_s;
+    // A simulated robot runs in lockstep; with an operator, pace it at the camera rate.
+    if (robot.mock && !o.scripted) o.pace_hz = config.robot.camera_fps;
+    {
+      const auto problems = o.validate();
+      if (!problems.empty()) {
+        for (const auto& p : problems) std::cerr << "pepper_app teach: " << p << "\n";
+        return 2;
+      }
+    }
+    install_interrupt_handlers();
+    auto ui = start_session_ui(a.common, config);
+    SessionLink link(ui.get(), &std::cout);
+    std::cerr << "teach: robot " << robot.bridge->describe() << ", recording to "
+              << o.recording_dir.string() << ", "
+              << (o.scripted ? "scripted drive along the world's path"
+                             : "drive from the teach UI (arrow keys); finish with the UI's Finish "
+                               "button or Ctrl-C")
+              << "\n";
+    const TeachResult r = run_teach_session(robot, o, link);
+    write_command_log(robot, a.mock_command_log);
+    for (const auto& w : r.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
+    std::cerr << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
+              << o.recording_dir.string() << ", " << r.distance_m << " m";
+    if (r.map_saved) std::cerr << "; map with " << r.key_images << " key images saved to " << a.map;
+    std::cerr << "\n";
+    if (!r.error.empty()) return report_error(r.error);
+    if (r.outcome == "interrupted") return 130;
+    return r.map_saved ? 0 : 1;
+  } catch (const std::exception& e) {
+    return report_error(e.what());
+  }
+}
+
+}  // namespace
+
+void register_teach_command(CLI::App& app) {
+  auto args = std::make_shared<TeachArgs>();
+  auto* cmd = app.add_subcommand(
+      "teach",
+      "Teach a tour: drive the robot (teach UI arrow keys with a dead-man, or the mock world's\n"
+      "scripted path), record every frame (crash-safe) and pick key images online; at the end\n"
+      "(UI Finish, end of the scripted path, --max-distance, or Ctrl-C) the robot is stopped and\n"
+      "the map saved. An interrupted teach keeps its recording: `pepper_app map build` turns it\n"
+      "into a map.");
+  add_common_session_options(cmd, args->common, true);
+  cmd->add_option("--map", args->map, "Map folder to write (replaced atomically)")->required();
+  cmd->add_option("--recording", args->recording,
+                  "Recording folder (default: MAP.recording, or MAP.recording.N if taken)");
+  cmd->add_flag("--scripted", args->scripted,
+                "Drive along the mock world's taught path (mock: robots; default there without --ui)");
+  cmd->add_flag("--manual", args->manual, "Drive from the teach UI even on a mock: robot");
+  cmd->add_option("--max-distance", args->max_distance_m, "End the tour after this many metres")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-frames", args->max_frames, "End the tour after this many frames")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--mock-command-log", args->mock_command_log,
+                  "mock: robots: write every base command received as JSON lines here");
+  cmd->footer(
+      "Examples:\n"
+      "  pepper_app teach --robot tcp://10.0.0.5 --map maps/lab --ui\n"
+      "  pepper_app teach --robot mock:worlds/robotics_room.yaml --map /tmp/room "
+      "--set robot.camera_width_px=320 --set robot.camera_height_px=240");
+  cmd->callback([args] { exit_code() = run_teach(*args); });
+}
+
+}  // namespace pepper::app

@@ -1,0 +1,294 @@
+#include "session/replay_session.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+
+#include "session/recording.hpp"
+#include "session/signals.hpp"
+#include "session/telemetry_json.hpp"
+
+namespace pepper::app {
+
+namespace nb = naoqi_bridge;
+namespace nav = core::navigator;
+using Clock = std::chrono::steady_clock;
+
+std::vector<std::string> ReplaySessionOptions::validate() const {
+  std::vector<std::string> e;
+  if (frame_timeout_ms < 100 || frame_timeout_ms > 10000)
+    e.push_back("frame_timeout_ms must be in 100..10000");
+  if (max_frames < 0) e.push_back("max_frames must be >= 0");
+  if (!(pace_hz >= 0)) e.push_back("pace_hz must be >= 0");
+  if (!(give_up_lost_s >= 0)) e.push_back("give_up_lost_s must be >= 0");
+  for (const auto& m : navigator.validate()) e.push_back("navigator: " + m);
+  return e;
+}
+
+namespace {
+
+bool close_rel(double a, double b, double tol) { return std::abs(a - b) <= tol * std::abs(b); }
+
+/// Throws std::invalid_argument when the camera cannot replay the map.
+void check_intrinsics(const core::CameraIntrinsics& map_cam, const core::CameraIntrinsics& cam) {
+  if (map_cam.width_px != cam.width_px || map_cam.height_px != cam.height_px) {
+    throw std::invalid_argument(
+        "camera delivers " + std::to_string(cam.width_px) + "x" + std::to_string(cam.height_px) +
+        " but the map was taught at " + std::to_string(map_cam.width_px) + "x" +
+        std::to_string(map_cam.height_px) + ": use --set robot.camera_width_px=" +
+        std::to_string(map_cam.width_px) + " --set robot.camera_height_px=" +
+        std::to_string(map_cam.height_px));
+  }
+  constexpr double kTol = 0.02;  // 2 %: a different calibration, not rounding
+  if (!close_rel(cam.fx_px, map_cam.fx_px, kTol) || !close_rel(cam.fy_px, map_cam.fy_px, kTol) ||
+      std::abs(cam.cx_px - map_cam.cx_px) > 0.02 * cam.width_px ||
+      std::abs(cam.cy_px - map_cam.cy_px) > 0.02 * cam.height_px) {
+    throw std::invalid_argument("camera intrinsics differ from the map's (fx " +
+                                std::to_string(cam.fx_px) + " vs " +
+                                std::to_string(map_cam.fx_px) + "): another robot or camera?");
+  }
+}
+
+std::string replay_state_name(nav::NavState s) {
+  switch (s) {
+    case nav::NavState::kNotLocalized: return "localising";
+    case nav::NavState::kTourComplete: return "finished";
+    case nav::NavState::kLost: return "stopped";
+    default: return "running";
+  }
+}
+
+}  // namespace
+
+ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemory map,
+                                const ReplaySessionOptions& options, SessionLink& link,
+                                StepFunction step_override) {
+  const auto problems = options.validate();
+  if (!problems.empty()) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
+    throw std::invalid_argument("replay options: " + all);
+  }
+  nb::RobotBridge& bridge = *robot.bridge;
+  ReplayResult result;
+  result.key_image_count = static_cast<int>(map.key_images.size());
+  auto stop_base = [&](const std::string& why) {
+    bridge.stop();
+    link.command_event(0.0, 0.0, true, why);
+  };
+  auto end_with = [&](const std::string& outcome, const std::string& reason_text) {
+    stop_base(outcome);
+    result.outcome = outcome;
+    link.publish_state({{"stop_reason", reason_text}});
+  };
+
+  std::optional<nav::Navigator> navigator;
+  std::optional<RecordingWriter> writer;
+  std::ofstream telemetry;
+  try {
+    link.publish_state({{"mode", robot.mock ? "offline" : "replay"},
+                        {"connection", {{"robot", "connecting"}, {"head_locked", false}}},
+                        {"stop_reason", nullptr}});
+    bridge.connect();
+    const nb::HeadLockStatus head = bridge.lock_head(options.head);
+    link.event({{"event", "head_lock"},
+                {"holding", head.holding},
+                {"head_yaw_rad", head.head_yaw_rad},
+                {"head_pitch_rad", head.head_pitch_rad},
+                {"max_error_rad", head.max_error_rad}});
+    const core::CameraIntrinsics camera = bridge.start_camera(options.camera);
+    check_intrinsics(map.camera, camera);
+    link.publish_state({{"connection",
+                         {{"robot", "connected"},
+                          {"head_locked", head.holding},
+                          {"detail", bridge.describe()}}}});
+    // Key-image strip for the replay view.
+    nlohmann::json keys = nlohmann::json::array();
+    for (std::size_t i = 0; i < map.key_images.size(); ++i) {
+      const auto& f = map.key_images[i].features;
+      keys.push_back({{"index", i},
+                      {"n_lines", f.lines.size()},
+                      {"n_points", f.corners_px.size()},
+                      {"weak", false}});
+      if (link.has_ui()) link.publish_thumbnail("key/" + std::to_string(i), f.gray);
+    }
+    link.publish_state({{"teach", {{"key_images", keys}}}});
+    if (!step_override) navigator.emplace(std::move(map), options.navigator);
+    const auto key_gray = [&](int i) -> cv::Mat {
+      if (!navigator || i < 0 || i >= result.key_image_count) return {};
+      return navigator->map().key_images[i].features.gray;
+    };
+    if (!options.telemetry_jsonl.empty()) {
+      telemetry.open(options.telemetry_jsonl);
+      if (!telemetry) throw std::runtime_error(options.telemetry_jsonl.string() + ": cannot write");
+    }
+    if (!options.record_dir.empty()) {
+      writer.emplace(options.record_dir, camera, bridge.describe(), options.config_json);
+    }
+
+    bool started = !options.wait_for_start;
+    if (!started) link.publish_state({{"replay", {{"state", "stopped"}}}});
+    auto last_frame_at = Clock::now();
+    int64_t t0_ns = -1;
+    int last_in = -2;
+    int64_t last_moving_t_ns = -1;
+    nlohmann::json replayed = nlohmann::json::array();
+    nlohmann::json taught = nlohmann::json::array();
+    for (const auto& p : options.taught_path_m) taught.push_back({p.x(), p.y()});
+    auto next_iter = Clock::now();
+    link.event({{"event", "replay_started"}, {"key_images", result.key_image_count}});
+
+    for (;;) {
+      if (interrupted()) {
+        end_with("interrupted", "interrupted (Ctrl-C)");
+        break;
+      }
+      bool ui_stop = false;
+      while (auto in = link.poll_intent()) {
+        if (in->kind == teach_ui::IntentKind::kEmergencyStop) ui_stop = true;
+        if (in->kind == teach_ui::IntentKind::kStartReplay) started = true;
+      }
+      if (ui_stop) {
+        end_with("ui_stop", "STOP pressed");
+        break;
+      }
+      if (bridge.state() == nb::ConnectionState::kLost) {
+        end_with("connection_lost", "connection to the robot lost");
+        break;
+      }
+      auto frame = bridge.next_frame(std::chrono::milliseconds(100));
+      if (!frame) {
+        if (Clock::now() - last_frame_at > std::chrono::milliseconds(options.frame_timeout_ms)) {
+          end_with("frame_timeout",
+                   "no camera frame for " + std::to_string(options.frame_timeout_ms) + " ms");
+          break;
+        }
+        continue;
+      }
+      last_frame_at = Clock::now();
+      if (t0_ns < 0) t0_ns = frame->t_ns;
+      ++result.frames;
+      if (writer) writer->append(*frame, 0.0, 0.0);
+      if (!started) {
+        link.publish_frame(*frame, nlohmann::json::object());
+        continue;
+      }
+      const nav::StepResult step = step_override ? step_override(*frame) : navigator->step(*frame);
+      const nav::Command& c = step.command;
+      const nav::Telemetry& t = step.telemetry;
+      const bool finite = std::isfinite(c.v_m_s) && std::isfinite(c.omega_rad_s);
+      if (c.stop || !finite) {
+        stop_base(finite ? nav::to_string(c.reason) : "non_finite_command");
+      } else {
+        bridge.move({c.v_m_s, 0.0, c.omega_rad_s});
+        link.command_event(c.v_m_s, c.omega_rad_s, false, "navigator");
+      }
+      result.max_key_reached = std::max(result.max_key_reached, t.in);
+      if (!c.stop) last_moving_t_ns = frame->t_ns;
+      const bool gave_up = options.give_up_lost_s > 0 && last_moving_t_ns >= 0 && c.stop &&
+                           c.reason == nav::StopReason::kFeaturesLost &&
+                           (frame->t_ns - last_moving_t_ns) * 1e-9 > options.give_up_lost_s;
+
+      ReplaySample s;
+      s.t_s = (frame->t_ns - t0_ns) * 1e-9;
+      s.v_m_s = c.stop ? 0.0 : c.v_m_s;
+      s.omega_rad_s = c.stop ? 0.0 : c.omega_rad_s;
+      s.stop = c.stop;
+      s.in = t.in;
+      s.n_lines = t.n_lines_next;
+      s.n_points = t.n_points_next;
+      nlohmann::json line = {{"frame", result.frames - 1},
+                             {"command", command_to_json(c)},
+                             {"telemetry", telemetry_to_json(t)}};
+      if (robot.mock) {
+        const auto gt = robot.mock->ground_truth();
+        s.has_pose = true;
+        s.x_m = gt.base.x_m;
+        s.y_m = gt.base.y_m;
+        s.yaw_rad = gt.base.yaw_rad;
+        line["ground_truth"] = {{"x_m", s.x_m}, {"y_m", s.y_m}, {"yaw_rad", s.yaw_rad}};
+        replayed.push_back({s.x_m, s.y_m});
+        if (link.has_ui() && result.frames % 5 == 0) {
+          link.publish_state({{"trajectory", {{"taught", taught}, {"replayed", replayed}}},
+                              {"pose", line["ground_truth"]}});
+        }
+        if (robot.mock->collided()) {
+          result.samples.push_back(s);
+          end_with("error", "collision with " + (gt.collision ? gt.collision->what : "?"));
+          result.error = "collision";
+          break;
+        }
+      }
+      result.samples.push_back(s);
+      if (telemetry.is_open()) telemetry << line.dump() << "\n";
+
+      if (link.has_ui()) {
+        link.publish_frame(*frame, {{"text",
+                                     {std::string(nav::to_string(t.state)) + "  IP " +
+                                      std::to_string(t.ip) + "  IN " + std::to_string(t.in) +
+                                      "  lines " + std::to_string(t.n_lines_next) + "  points " +
+                                      std::to_string(t.n_points_next)}}});
+        link.publish_samples({{"t_s", s.t_s},
+                              {"v_m_s", s.v_m_s},
+                              {"omega_rad_s", s.omega_rad_s},
+                              {"n_lines", s.n_lines},
+                              {"n_points", s.n_points}});
+        link.publish_state({{"replay",
+                             {{"state", replay_state_name(t.state)},
+                              {"key_index", t.in},
+                              {"key_count", result.key_image_count}}},
+                            {"drive", {{"v_m_s", s.v_m_s}, {"omega_rad_s", s.omega_rad_s}}}});
+        if (t.in != last_in) {
+          last_in = t.in;
+          link.publish_thumbnail("ip", key_gray(t.ip));
+          link.publish_thumbnail("in", key_gray(t.in));
+          link.publish_thumbnail("inn", key_gray(t.inn));
+        }
+      }
+      if (t.state == nav::NavState::kTourComplete ||
+          (c.stop && c.reason == nav::StopReason::kTourComplete)) {
+        result.tour_complete = true;
+        end_with("tour_complete", "end of tour reached");
+        link.publish_state({{"replay", {{"state", "finished"},
+                                        {"key_index", t.in},
+                                        {"key_count", result.key_image_count}}}});
+        break;
+      }
+      if (gave_up) {
+        end_with("lost", "features lost for more than " + std::to_string(options.give_up_lost_s) +
+                             " s: giving up");
+        break;
+      }
+      if (options.max_frames > 0 && result.frames >= options.max_frames) {
+        end_with("max_frames", "frame limit reached");
+        break;
+      }
+      if (options.pace_hz > 0) {
+        next_iter += std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double>(1.0 / options.pace_hz));
+        std::this_thread::sleep_until(next_iter);
+        if (Clock::now() > next_iter + std::chrono::seconds(1)) next_iter = Clock::now();
+      }
+    }
+  } catch (const std::exception& e) {
+    bridge.stop();  // first
+    link.command_event(0.0, 0.0, true, "error");
+    result.outcome = bridge.state() == nb::ConnectionState::kLost ? "connection_lost" : "error";
+    result.error = e.what();
+    link.publish_state({{"stop_reason", std::string("error: ") + e.what()}});
+  }
+  bridge.release();
+  link.event({{"event", "replay_done"},
+              {"outcome", result.outcome},
+              {"error", result.error},
+              {"frames", result.frames},
+              {"max_key_reached", result.max_key_reached},
+              {"key_images", result.key_image_count},
+              {"tour_complete", result.tour_complete}});
+  return result;
+}
+
+}  // namespace pepper::app

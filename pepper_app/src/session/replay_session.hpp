@@ -1,0 +1,80 @@
+#pragma once
+// The replay session loop (METHOD.md "Replay"; issue 6): connect, lock the head, start the camera,
+// check the map's intrinsics against the camera's, then per frame Navigator::step -> bridge.move,
+// or bridge.stop with the reason. Telemetry is written per frame as JSON lines (optional), the
+// frames optionally recorded (RecordingWriter).
+//
+// Stops whenever unsure: the navigator says stop (not localised, features lost: it keeps
+// stepping; tour complete: the session ends), no frame for frame_timeout_ms (ends, "frame_timeout"),
+// an exception from the core or the bridge ("error"), Ctrl-C ("interrupted"), the UI's STOP
+// ("ui_stop"), a lost connection ("connection_lost"), the frame cap ("max_frames"). Every way out
+// sends bridge.stop() first.
+// On the mock robot the ground-truth base positions are collected (top view, evaluation).
+// Threads: none of its own. Errors end in ReplayResult (never thrown) after the stop.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/memory/visual_memory.hpp"
+#include "core/navigator/navigator.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+#include "session/robot_connection.hpp"
+#include "session/session_link.hpp"
+
+namespace pepper::app {
+
+struct ReplaySessionOptions {
+  naoqi_bridge::CameraRequest camera;
+  naoqi_bridge::HeadLockRequest head;
+  core::navigator::NavigatorOptions navigator;
+  int frame_timeout_ms = 1000;       ///< no frame this long: stop and end ("frame_timeout")
+  int64_t max_frames = 0;            ///< > 0: stop and end after this many frames
+  std::filesystem::path telemetry_jsonl;  ///< non-empty: one JSON line per frame
+  std::filesystem::path record_dir;  ///< non-empty: record the frames here
+  double pace_hz = 0.0;              ///< > 0: at most this many frames per second
+  bool wait_for_start = false;       ///< wait for the UI's start_replay before moving
+  /// > 0: end ("lost") after the navigator stopped for lost features this long (frame time)
+  /// once it had been driving; 0 = keep trying to relocalise until stopped by the operator.
+  double give_up_lost_s = 0.0;
+  std::string config_json = "{}";
+  std::vector<Eigen::Vector2d> taught_path_m;  ///< mock only: shown in the UI's top view
+  std::vector<std::string> validate() const;
+};
+
+/// One replayed frame (for plots and the report).
+struct ReplaySample {
+  double t_s = 0.0;
+  double v_m_s = 0.0, omega_rad_s = 0.0;
+  bool stop = true;
+  int in = -1;
+  int n_lines = 0, n_points = 0;
+  bool has_pose = false;
+  double x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;  ///< mock ground truth
+};
+
+struct ReplayResult {
+  std::string outcome;  ///< tour_complete, interrupted, ui_stop, frame_timeout, connection_lost,
+                        ///< error, max_frames, lost
+  std::string error;
+  int64_t frames = 0;
+  int key_image_count = 0;
+  int max_key_reached = -1;
+  bool tour_complete = false;
+  std::vector<ReplaySample> samples;
+};
+
+/// Replaces Navigator::step (tests inject faults); empty = a Navigator over the map.
+using StepFunction = std::function<core::navigator::StepResult(const core::Frame&)>;
+
+/// Runs a replay of `map` on `robot` (opened, not connected). Throws std::invalid_argument for
+/// invalid options before anything moves; everything else ends in the result after a stop.
+ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemory map,
+                                const ReplaySessionOptions& options, SessionLink& link,
+                                StepFunction step_override = {});
+
+}  // namespace pepper::app

@@ -1,0 +1,85 @@
+#include "session/robot_connection.hpp"
+
+#include <unistd.h>
+
+#include <stdexcept>
+
+#include "naoqi_bridge/mock/mock_bridge.hpp"
+#include "naoqi_bridge/mock/world.hpp"
+#include "naoqi_bridge/qi/qi_bridge.hpp"
+#include "naoqi_bridge/qi/session.hpp"
+#include "naoqi_bridge/qi/url.hpp"
+
+namespace pepper::app {
+
+namespace mock = naoqi_bridge::mock;
+namespace qi = naoqi_bridge::qi;
+
+RobotUrl parse_robot_url(const std::string& text) {
+  RobotUrl out;
+  if (text.rfind("mock:", 0) == 0) {
+    out.kind = RobotUrl::Kind::kMock;
+    out.world_file = text.substr(5);
+    if (out.world_file.empty()) {
+      throw std::invalid_argument("robot URL '" + text + "': mock: needs a world file, e.g. "
+                                  "mock:worlds/robotics_room.yaml");
+    }
+    out.url = text;
+    return out;
+  }
+  if (text.rfind("tcp://", 0) != 0 && text.rfind("tcps://", 0) != 0) {
+    throw std::invalid_argument("robot URL '" + text +
+                                "': expected tcp://HOST[:9559], tcps://HOST[:9503] or mock:WORLD");
+  }
+  try {
+    const qi::Url u = qi::parse_url(text);
+    out.kind = u.tls ? RobotUrl::Kind::kTcps : RobotUrl::Kind::kTcp;
+    out.url = u.to_string();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument("robot URL '" + text + "': " + e.what());
+  }
+  return out;
+}
+
+RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options) {
+  RobotConnection c;
+  c.url = parse_robot_url(url);
+  if (c.url.kind == RobotUrl::Kind::kMock) {
+    auto world = std::make_shared<const mock::World>(mock::load_world(c.url.world_file));
+    mock::MockRobotOptions ro;
+    ro.frame_rate_hz = options.mock_frame_rate_hz;
+    c.mock = std::make_shared<mock::MockRobot>(world, ro);
+    mock::MockBridgeOptions bo;
+    bo.description = c.url.url;
+    c.bridge = std::make_unique<mock::MockBridge>(*c.mock, bo);
+    return c;
+  }
+  qi::QiBridgeOptions qo;
+  qo.url = c.url.url;
+  qo.user = options.user;
+  qo.watchdog_timeout = std::chrono::milliseconds(options.watchdog_ms);
+  qo.frame_stall_timeout = std::chrono::milliseconds(options.frame_stall_ms);
+  if (!options.user.empty()) {
+    if (!options.password_file.empty()) {
+      qo.password = qi::read_password_file(options.password_file);
+    } else if (auto env = qi::read_password_env("PEPPER_PASSWORD")) {
+      qo.password = *env;
+    } else if (options.allow_prompt && ::isatty(STDIN_FILENO) != 0) {
+      qo.password = qi::prompt_password("Password for '" + options.user + "' on " + qo.url + ": ");
+    } else {
+      throw naoqi_bridge::BridgeError(
+          "no password for user '" + options.user +
+          "': give --password-file FILE or set PEPPER_PASSWORD (no terminal to prompt on)");
+    }
+  }
+  const auto problems = qo.validate();
+  if (!problems.empty()) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
+    throw std::invalid_argument("robot connection options: " + all);
+  }
+  c.bridge = std::make_unique<qi::QiBridge>(std::move(qo));
+  return c;
+}
+
+}  // namespace pepper::app

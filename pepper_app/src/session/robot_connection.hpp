@@ -1,0 +1,54 @@
+#pragma once
+// Robot connection factory: a robot URL from the command line becomes a RobotBridge.
+//
+//   tcp://HOST[:9559]    NAOqi 2.5, or a running `pepper_app mock-robot` (tcp://127.0.0.1:PORT)
+//   tcps://HOST[:9503]   NAOqi 2.9+ (TLS, login): user from RobotConfig::user / --user,
+//                        password from --password-file, else $PEPPER_PASSWORD, else an
+//                        interactive prompt without echo when stdin is a terminal. Never from the
+//                        command line, never logged.
+//   mock:WORLD_FILE      in-process simulated Pepper (MockRobot + MockBridge); the connection
+//                        also exposes the MockRobot (ground truth, top view, placement).
+//
+// Ownership: RobotConnection owns the bridge and (for mock:) the simulated robot; the bridge is
+// destroyed first (it refers to the robot). Errors: a malformed URL throws std::invalid_argument
+// naming it; a missing world file throws the mock's WorldError; a missing password throws
+// naoqi_bridge::BridgeError. Nothing connects here: the session calls bridge->connect().
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+
+namespace pepper::app {
+
+struct RobotUrl {
+  enum class Kind { kTcp, kTcps, kMock };
+  Kind kind = Kind::kMock;
+  std::string url;                   ///< normalised (default port added for tcp/tcps)
+  std::filesystem::path world_file;  ///< kMock only
+};
+
+/// Parses and normalises a robot URL. Throws std::invalid_argument naming the URL.
+RobotUrl parse_robot_url(const std::string& text);
+
+struct RobotConnectOptions {
+  std::string user;                 ///< login user (tcps; "nao" on NAOqi 2.9)
+  std::string password_file;        ///< first line is the password
+  bool allow_prompt = true;         ///< prompt on the terminal when no file/env password
+  int watchdog_ms = 300;            ///< QiBridge: stop without a fresh move() this long
+  int frame_stall_ms = 1000;        ///< QiBridge: stop when moving and frames stall this long
+  double mock_frame_rate_hz = 15.0; ///< mock: simulated camera rate (lockstep)
+};
+
+struct RobotConnection {
+  RobotUrl url;
+  std::shared_ptr<naoqi_bridge::mock::MockRobot> mock;     ///< set for mock: URLs only
+  std::unique_ptr<naoqi_bridge::RobotBridge> bridge;       ///< declared last: destroyed first
+};
+
+/// Builds the bridge for `url` (does not connect).
+RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options);
+
+}  // namespace pepper::app

@@ -1,0 +1,77 @@
+#include "session/session_cli.hpp"
+
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "teach_ui/ui_server.hpp"
+
+namespace pepper::app {
+
+void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool with_robot) {
+  if (with_robot) {
+    cmd->add_option("--robot", args.robot,
+                    "Robot URL: tcp://HOST[:9559], tcps://HOST[:9503], mock:WORLD.yaml")
+        ->required();
+    cmd->add_option("--user", args.user, "Login user for tcps:// (NAOqi 2.9: nao); default robot.user");
+    cmd->add_option("--password-file", args.password_file,
+                    "File whose first line is the password (else $PEPPER_PASSWORD, else a prompt)")
+        ->check(CLI::ExistingFile);
+  }
+  cmd->add_option("--config", args.config_file, "Configuration file (YAML/JSON; see `config dump`)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--set", args.sets, "Override one parameter: dotted.key=value (repeatable)");
+  cmd->add_flag("--ui", args.ui, "Serve the teach UI on 127.0.0.1 (port: ui.port)");
+  cmd->add_option("--ui-port", args.ui_port, "Serve the teach UI on this port (0 = any free port)")
+      ->check(CLI::Range(0, 65535));
+}
+
+AppConfig load_session_config(const CommonSessionArgs& args) {
+  return load_app_config(args.config_file, args.sets);
+}
+
+RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config) {
+  RobotConnectOptions o;
+  o.user = args.user.empty() ? config.robot.user : args.user;
+  o.password_file = args.password_file;
+  o.watchdog_ms = config.robot.watchdog_ms;
+  o.frame_stall_ms = config.robot.frame_timeout_ms;
+  o.mock_frame_rate_hz = config.robot.camera_fps;
+  return o;
+}
+
+naoqi_bridge::CameraRequest camera_request(const AppConfig& config) {
+  naoqi_bridge::CameraRequest r;
+  r.width_px = config.robot.camera_width_px;
+  r.height_px = config.robot.camera_height_px;
+  r.fps = config.robot.camera_fps;
+  return r;
+}
+
+naoqi_bridge::HeadLockRequest head_request(const AppConfig& config) {
+  naoqi_bridge::HeadLockRequest r;
+  r.head_yaw_rad = config.robot.head_yaw_rad;
+  r.head_pitch_rad = config.robot.head_pitch_rad;
+  return r;
+}
+
+std::unique_ptr<teach_ui::UiServer> start_session_ui(const CommonSessionArgs& args,
+                                                     const AppConfig& config) {
+  if (!args.ui && args.ui_port < 0) return nullptr;
+  teach_ui::UiOptions o;
+  o.port = static_cast<std::uint16_t>(args.ui_port >= 0 ? args.ui_port : config.ui.port);
+  o.limits.max_v_m_s = config.ui.max_v_m_s;
+  o.limits.max_omega_rad_s = config.ui.max_omega_rad_s;
+  o.log = [](teach_ui::UiLogLevel level, std::string_view text) {
+    if (level >= teach_ui::UiLogLevel::kWarning) std::cerr << "teach UI: " << text << "\n";
+  };
+  auto ui = std::make_unique<teach_ui::UiServer>(o);
+  ui->start();
+  std::cout << nlohmann::json{{"event", "listening"}, {"url", ui->url()}, {"port", ui->port()}}.dump()
+            << "\n"
+            << std::flush;
+  std::cerr << "teach UI: open " << ui->url() << " in a browser on this machine\n";
+  return ui;
+}
+
+}  // namespace pepper::app

@@ -1,0 +1,48 @@
+#pragma once
+// Command-line wiring shared by `teach`, `replay` and `demo`: the common options (--robot,
+// --config, --set, --ui, --ui-port, --user, --password-file), the effective configuration, the
+// robot connection options, the camera / head-lock requests from RobotConfig, and the teach UI
+// server (started on 127.0.0.1; its URL is printed as a JSON line on stdout,
+// {"event":"listening","url":"http://127.0.0.1:PORT/"}, plus a human line on stderr).
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "config/app_config.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+#include "session/robot_connection.hpp"
+
+namespace pepper::teach_ui {
+class UiServer;
+}
+
+namespace pepper::app {
+
+struct CommonSessionArgs {
+  std::string robot;
+  std::string config_file;
+  std::vector<std::string> sets;
+  bool ui = false;
+  int ui_port = -1;  ///< -1: config ui.port; 0: any free port
+  std::string user;
+  std::string password_file;
+};
+
+/// Adds --config, --set, --ui, --ui-port (and --robot, --user, --password-file when `with_robot`).
+void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool with_robot);
+
+/// Defaults + --config file + --set overrides, validated. Throws ConfigError listing problems.
+AppConfig load_session_config(const CommonSessionArgs& args);
+
+RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config);
+naoqi_bridge::CameraRequest camera_request(const AppConfig& config);
+naoqi_bridge::HeadLockRequest head_request(const AppConfig& config);
+
+/// Starts the UI when --ui or --ui-port was given (else returns null) and announces its URL.
+std::unique_ptr<teach_ui::UiServer> start_session_ui(const CommonSessionArgs& args,
+                                                     const AppConfig& config);
+
+}  // namespace pepper::app

@@ -1,0 +1,312 @@
+#include "session/teach_session.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+
+#include "core/memory/visual_memory.hpp"
+#include "naoqi_bridge/mock/teach_driver.hpp"
+#include "session/recording.hpp"
+#include "session/signals.hpp"
+
+namespace pepper::app {
+
+namespace nb = naoqi_bridge;
+using Clock = std::chrono::steady_clock;
+
+std::vector<std::string> TeachSessionOptions::validate() const {
+  std::vector<std::string> e;
+  if (map_dir.empty()) e.push_back("map_dir must be given");
+  if (recording_dir.empty()) e.push_back("recording_dir must be given");
+  if (max_distance_m < 0) e.push_back("max_distance_m must be >= 0");
+  if (max_frames < 0) e.push_back("max_frames must be >= 0");
+  if (frame_timeout_ms < 100 || frame_timeout_ms > 10000)
+    e.push_back("frame_timeout_ms must be in 100..10000");
+  if (!(drive_timeout_s >= 0.1 && drive_timeout_s <= 10)) e.push_back("drive_timeout_s must be in [0.1, 10]");
+  if (!(pace_hz >= 0)) e.push_back("pace_hz must be >= 0");
+  if (!(max_v_m_s > 0 && max_v_m_s <= 0.55)) e.push_back("max_v_m_s must be in (0, 0.55]");
+  if (!(max_omega_rad_s > 0 && max_omega_rad_s <= 2.0))
+    e.push_back("max_omega_rad_s must be in (0, 2]");
+  for (const auto& m : teach.validate()) e.push_back("teach: " + m);
+  return e;
+}
+
+namespace {
+
+nlohmann::json teach_state(const TeachResult& r, const nlohmann::json& keys) {
+  return {{"key_images", keys}, {"distance_m", r.distance_m}};
+}
+
+}  // namespace
+
+TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions& options,
+                              SessionLink& link) {
+  const auto problems = options.validate();
+  if (!problems.empty()) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
+    throw std::invalid_argument("teach options: " + all);
+  }
+  if (options.scripted && !robot.mock) {
+    throw std::invalid_argument("teach: --scripted needs a mock: robot (it drives on ground truth)");
+  }
+  nb::RobotBridge& bridge = *robot.bridge;
+  TeachResult result;
+  std::optional<RecordingWriter> writer;
+  std::optional<core::mapping::Teacher> teacher;
+  nlohmann::json key_list = nlohmann::json::array();
+  bool recording = options.record_from_start;
+  auto stop_base = [&](const std::string& why) {
+    bridge.stop();
+    link.command_event(0.0, 0.0, true, why);
+    link.publish_state({{"drive", {{"v_m_s", 0.0}, {"omega_rad_s", 0.0}}}});
+  };
+
+  try {
+    link.publish_state({{"mode", "teach"},
+                        {"connection", {{"robot", "connecting"}, {"head_locked", false}}}});
+    bridge.connect();
+    const nb::HeadLockStatus head = bridge.lock_head(options.head);
+    link.event({{"event", "head_lock"},
+                {"holding", head.holding},
+                {"head_yaw_rad", head.head_yaw_rad},
+                {"head_pitch_rad", head.head_pitch_rad},
+                {"max_error_rad", head.max_error_rad}});
+    if (!head.holding) {
+      result.warnings.push_back("head lock not holding: max error " +
+                                std::to_string(head.max_error_rad) + " rad");
+    }
+    const core::CameraIntrinsics camera = bridge.start_camera(options.camera);
+    link.publish_state({{"connection",
+                         {{"robot", "connected"},
+                          {"head_locked", head.holding},
+                          {"detail", bridge.describe()}}},
+                        {"recording", recording}});
+    writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json);
+    teacher.emplace(camera, options.teach);
+    link.event({{"event", "teach_started"},
+                {"recording", options.recording_dir.string()},
+                {"camera", {{"width_px", camera.width_px}, {"height_px", camera.height_px}}}});
+
+    std::optional<nb::mock::TeachDriver> driver;
+    if (options.scripted) driver.emplace(robot.mock->world().scenario);
+
+    nb::BaseVelocity drive{};  // UI drive request
+    Clock::time_point drive_at{};
+    nb::BaseVelocity sent{};   // what the base is doing
+    bool moving = false;
+    auto last_frame_at = Clock::now();
+    bool stalled = false;
+    int64_t t0_ns = -1, prev_t_ns = -1;
+    std::optional<Eigen::Vector2d> prev_pos;
+    auto next_iter = Clock::now();
+
+    for (;;) {
+      if (interrupted()) {
+        stop_base("interrupted");
+        result.outcome = "interrupted";
+        break;
+      }
+      bool finish = false;
+      while (auto in = link.poll_intent()) {
+        using K = teach_ui::IntentKind;
+        switch (in->kind) {
+          case K::kDrive:
+            drive.v_x_m_s = std::clamp(in->v_m_s, -options.max_v_m_s, options.max_v_m_s);
+            drive.omega_rad_s =
+                std::clamp(in->omega_rad_s, -options.max_omega_rad_s, options.max_omega_rad_s);
+            drive_at = Clock::now();
+            break;
+          case K::kDriveReleased:
+            drive = {};
+            break;
+          case K::kEmergencyStop:
+            drive = {};
+            driver.reset();  // a scripted drive does not resume after STOP
+            stop_base("ui_stop");
+            moving = false;
+            break;
+          case K::kStartRecording:
+            recording = true;
+            link.publish_state({{"recording", true}});
+            break;
+          case K::kStopRecording:
+            recording = false;
+            link.publish_state({{"recording", false}});
+            break;
+          case K::kFinishTeach:
+            finish = true;
+            break;
+          case K::kStartReplay:
+            break;
+        }
+      }
+      if (finish) break;
+
+      auto frame = bridge.next_frame(std::chrono::milliseconds(100));
+      if (!frame) {
+        if (!stalled && Clock::now() - last_frame_at >
+                            std::chrono::milliseconds(options.frame_timeout_ms)) {
+          stalled = true;
+          stop_base("frame_timeout");
+          moving = false;
+          result.warnings.push_back("frames stalled: base stopped");
+          link.publish_state({{"stop_reason", "no camera frame for " +
+                                                  std::to_string(options.frame_timeout_ms) +
+                                                  " ms: base stopped"}});
+        }
+        continue;
+      }
+      last_frame_at = Clock::now();
+      if (stalled) {
+        stalled = false;
+        link.publish_state({{"stop_reason", nullptr}});
+      }
+      if (t0_ns < 0) t0_ns = frame->t_ns;
+      const double dt_s = prev_t_ns < 0 ? 0.0 : (frame->t_ns - prev_t_ns) * 1e-9;
+      prev_t_ns = frame->t_ns;
+
+      // Distance: ground truth on the mock robot, else the commanded speed integrated.
+      std::optional<Eigen::Vector2d> pos;
+      if (robot.mock) {
+        const auto gt = robot.mock->ground_truth();
+        pos = Eigen::Vector2d(gt.base.x_m, gt.base.y_m);
+        if (prev_pos) result.distance_m += (*pos - *prev_pos).norm();
+        prev_pos = pos;
+      } else {
+        result.distance_m += std::abs(sent.v_x_m_s) * dt_s;
+      }
+
+      if (recording) {
+        writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
+        const core::mapping::TeachStep step = teacher->add_frame(*frame);
+        if (pos) result.path_m.push_back(*pos);
+        if (step.new_key_frame) {
+          const int k = step.key_image_count - 1;
+          if (pos) result.key_m.push_back(*pos);
+          key_list.push_back({{"index", k},
+                              {"n_lines", step.n_lines_three_view},
+                              {"n_points", step.n_points_two_view},
+                              {"distance_m", result.distance_m},
+                              {"weak", false}});
+          link.publish_thumbnail("key/" + std::to_string(k), frame->gray);
+          link.publish_state({{"teach", teach_state(result, key_list)}});
+        }
+        link.publish_samples({{"t_s", (frame->t_ns - t0_ns) * 1e-9},
+                              {"distance_m", result.distance_m},
+                              {"v_m_s", sent.v_x_m_s},
+                              {"omega_rad_s", sent.omega_rad_s},
+                              {"n_lines", step.n_lines_three_view},
+                              {"n_points", step.n_points_two_view}});
+      }
+      nlohmann::json overlay = {{"text", {std::string(recording ? "REC " : "") + "frame " +
+                                          std::to_string(frame->index) + ", key images " +
+                                          std::to_string(teacher->key_image_count())}}};
+      link.publish_frame(*frame, overlay);
+
+      // Command for the next frame period.
+      nb::BaseVelocity cmd{};
+      if (driver) {
+        const auto gt = robot.mock->ground_truth();
+        cmd = driver->command(gt.base, (frame->t_ns - t0_ns) * 1e-9);
+        if (driver->done()) finish = true;
+      } else if (Clock::now() - drive_at <
+                 std::chrono::duration<double>(options.drive_timeout_s)) {
+        cmd = drive;
+      }
+      if (options.max_distance_m > 0 && result.distance_m >= options.max_distance_m) finish = true;
+      if (options.max_frames > 0 && teacher->frames_seen() >= options.max_frames) finish = true;
+      if (finish) break;
+      const bool want_move = cmd.v_x_m_s != 0.0 || cmd.omega_rad_s != 0.0;
+      if (want_move) {
+        bridge.move(cmd);
+        moving = true;
+        sent = cmd;
+        link.command_event(cmd.v_x_m_s, cmd.omega_rad_s, false, driver ? "scripted" : "operator");
+        link.publish_state({{"drive", {{"v_m_s", cmd.v_x_m_s}, {"omega_rad_s", cmd.omega_rad_s}}}});
+      } else if (moving) {
+        stop_base("released");
+        moving = false;
+        sent = {};
+      }
+      if (robot.mock) {
+        const auto gt = robot.mock->ground_truth();
+        link.publish_state({{"pose", {{"x_m", gt.base.x_m}, {"y_m", gt.base.y_m},
+                                      {"yaw_rad", gt.base.yaw_rad}}}});
+      }
+      if (options.pace_hz > 0) {
+        next_iter += std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double>(1.0 / options.pace_hz));
+        std::this_thread::sleep_until(next_iter);
+        if (Clock::now() > next_iter + std::chrono::seconds(1)) next_iter = Clock::now();
+      }
+    }
+    if (result.outcome.empty()) {
+      stop_base("tour_finished");
+      result.outcome = "finished";
+    }
+  } catch (const std::exception& e) {
+    bridge.stop();  // first, before anything else
+    link.command_event(0.0, 0.0, true, "error");
+    result.outcome = "failed";
+    result.error = e.what();
+  }
+
+  if (writer) result.frames_recorded = writer->frame_count();
+  if (teacher) result.frames_seen = teacher->frames_seen();
+  // Save what can be saved: the recording is already on disk; now the map.
+  if (teacher && teacher->frames_seen() >= 2) {
+    try {
+      core::memory::VisualMemory map = teacher->finish(options.config_json);
+      core::memory::save_map(map, options.map_dir);
+      result.map_saved = true;
+      const core::memory::MapSummary summary = core::memory::summarize(map);
+      result.key_images = summary.key_image_count;
+      nlohmann::json weak = nlohmann::json::array();
+      int min_lines = 1 << 30, min_points = 1 << 30;
+      for (std::size_t i = 0; i < summary.key_images.size(); ++i) {
+        const auto& k = summary.key_images[i];
+        min_lines = std::min(min_lines, k.lines);
+        min_points = std::min(min_points, k.corners);
+        if (k.lines + k.corners < options.min_key_features) {
+          weak.push_back(i);
+          result.warnings.push_back("key image " + std::to_string(i) + " has few features (" +
+                                    std::to_string(k.lines) + " lines, " +
+                                    std::to_string(k.corners) +
+                                    " points): replay may get lost there; add texture or "
+                                    "re-teach this part");
+        }
+      }
+      link.publish_state({{"map_summary",
+                           {{"key_images", summary.key_image_count},
+                            {"length_m", result.distance_m},
+                            {"min_lines", min_lines},
+                            {"min_points", min_points},
+                            {"weak_key_images", weak},
+                            {"path", options.map_dir.string()}}},
+                          {"warnings", result.warnings}});
+      link.event({{"event", "map_saved"},
+                  {"path", options.map_dir.string()},
+                  {"key_images", summary.key_image_count},
+                  {"weak_key_images", weak}});
+    } catch (const std::exception& e) {
+      result.warnings.push_back(std::string("map not saved: ") + e.what() +
+                                " (the recording can be turned into a map with `map build`)");
+    }
+  } else {
+    result.warnings.push_back("map not saved: fewer than 2 frames taught");
+  }
+  bridge.release();
+  link.event({{"event", "teach_done"},
+              {"outcome", result.outcome},
+              {"error", result.error},
+              {"frames", result.frames_recorded},
+              {"key_images", result.key_images},
+              {"map_saved", result.map_saved}});
+  return result;
+}
+
+}  // namespace pepper::app

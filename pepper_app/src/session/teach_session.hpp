@@ -1,0 +1,71 @@
+#pragma once
+// The teach session loop (METHOD.md "Teach"; issue 6): connect, lock the head (read-back
+// reported), start the camera, then per frame: record it (RecordingWriter, crash-safe), feed
+// core::mapping::Teacher online, and drive the base from the operator (teach UI drive intents
+// with a dead-man: a drive not refreshed within drive_timeout_s stops the base) or, on the mock
+// robot, from a scripted TeachDriver along the world's waypoints. The tour ends on the UI's
+// "finish" intent, when the scripted drive is done, or at max_distance_m / max_frames; the map
+// is then saved atomically (core::memory::save_map) and summarised, with a warning for each key
+// image with few features (lines + points < min_key_features).
+//
+// Safety: every way out (finish, Ctrl-C flag, exception, lost connection, stalled frames) sends
+// bridge.stop() FIRST; then the recording is kept (it can become a map with `map build`); then
+// the map is saved if the teacher saw at least 2 frames. Stalled frames (none for
+// frame_timeout_ms) stop the base; teach then keeps waiting (the operator may resume).
+// Threads: none of its own. Errors are reported in TeachResult (never thrown) after the stop.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/mapping/teacher.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+#include "session/robot_connection.hpp"
+#include "session/session_link.hpp"
+
+namespace pepper::app {
+
+struct TeachSessionOptions {
+  std::filesystem::path map_dir;        ///< required; written atomically at the end
+  std::filesystem::path recording_dir;  ///< required; must not exist or be empty
+  naoqi_bridge::CameraRequest camera;
+  naoqi_bridge::HeadLockRequest head;
+  core::mapping::TeachOptions teach;
+  std::string config_json = "{}";       ///< effective configuration, stored in map + recording
+  bool scripted = false;                ///< drive with the mock world's TeachDriver (mock: only)
+  double max_distance_m = 0.0;          ///< > 0: end the tour after this much driving
+  int64_t max_frames = 0;               ///< > 0: end the tour after this many frames
+  int frame_timeout_ms = 1000;          ///< no frame this long: stop the base
+  double drive_timeout_s = 0.5;         ///< app-side dead-man for UI drive intents
+  bool record_from_start = true;        ///< else wait for the UI's start_recording
+  double pace_hz = 0.0;                 ///< > 0: at most this many loop iterations per second
+  int min_key_features = 40;            ///< key images with fewer lines + points are "weak"
+  double max_v_m_s = 0.25;              ///< clamp for UI drive intents
+  double max_omega_rad_s = 0.5;
+  std::vector<std::string> validate() const;
+};
+
+struct TeachResult {
+  std::string outcome;  ///< "finished", "interrupted", "failed"
+  std::string error;    ///< what failed ("" otherwise)
+  int64_t frames_recorded = 0;
+  int64_t frames_seen = 0;
+  int key_images = 0;
+  bool map_saved = false;
+  double distance_m = 0.0;
+  std::vector<std::string> warnings;
+  std::vector<Eigen::Vector2d> path_m;  ///< mock only: ground-truth base positions per frame
+  std::vector<Eigen::Vector2d> key_m;   ///< mock only: base positions of the key images
+  bool ok() const { return outcome == "finished" && map_saved; }
+};
+
+/// Runs a teach session on `robot` (already opened, not connected). Never throws for robot or
+/// core failures (they end in TeachResult::outcome "failed" after a stop); throws
+/// std::invalid_argument for invalid options before anything moves.
+TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions& options,
+                              SessionLink& link);
+
+}  // namespace pepper::app

@@ -1,0 +1,254 @@
+// End-to-end: the built `pepper_app` binary as a subprocess (issue 6). Teach -> map -> replay on
+// the in-process mock robot (mock:WORLD) and through the mock NAOqi server over loopback; an
+// interrupted teach (SIGINT) leaves a recording that `map build` turns into a valid map, and the
+// robot received a stop. Short tours (about 2 m) at QVGA keep it to a few tens of seconds.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/memory/visual_memory.hpp"
+#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "naoqi_bridge/mock/world.hpp"
+#include "naoqi_bridge/qi/mock_server.hpp"
+
+extern char** environ;
+
+namespace pepper::app {
+namespace {
+
+namespace fs = std::filesystem;
+namespace mock = naoqi_bridge::mock;
+
+const std::string kBinary = std::string(PEPPER_BINARY_DIR) + "/pepper_app/pepper_app";
+const std::string kWorldFile = std::string(PEPPER_SOURCE_DIR) + "/worlds/robotics_room.yaml";
+const std::vector<std::string> kQvga = {"--set", "robot.camera_width_px=320", "--set",
+                                        "robot.camera_height_px=240"};
+
+fs::path fresh_dir(const std::string& name) {
+  auto p = fs::temp_directory_path() / ("pepper_e2e_" + name);
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+/// A running pepper_app subprocess with stdout/stderr in files.
+class Child {
+ public:
+  Child(std::vector<std::string> args, const fs::path& dir, const std::string& name)
+      : out_(dir / (name + ".stdout")), err_(dir / (name + ".stderr")) {
+    args.insert(args.begin(), kBinary);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int rc = posix_spawn(&pid_, kBinary.c_str(), &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0) throw std::runtime_error("cannot start " + kBinary);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  /// Exit code, or -1 after `limit` (the child is then killed).
+  int wait(std::chrono::seconds limit = std::chrono::seconds(120)) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return -1;
+  }
+  void signal(int sig) { kill(pid_, sig); }
+  std::string out() const { return slurp(out_); }
+  std::string err() const { return slurp(err_); }
+  std::string both() const { return "stdout:\n" + out() + "\nstderr:\n" + err(); }
+  static std::string slurp(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+  }
+
+ private:
+  fs::path out_, err_;
+  pid_t pid_ = -1;
+};
+
+std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+/// Last JSON event line of the given kind on stdout.
+nlohmann::json last_event(const std::string& out, const std::string& kind) {
+  std::istringstream in(out);
+  std::string line;
+  nlohmann::json found;
+  while (std::getline(in, line)) {
+    auto j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_object() && j.value("event", "") == kind) found = j;
+  }
+  return found;
+}
+
+std::vector<nlohmann::json> read_jsonl(const fs::path& p) {
+  std::vector<nlohmann::json> v;
+  std::ifstream f(p);
+  std::string line;
+  while (std::getline(f, line))
+    if (!line.empty()) v.push_back(nlohmann::json::parse(line));
+  return v;
+}
+
+TEST(AppE2E, TeachThenReplayOnMockRobot) {
+  const fs::path dir = fresh_dir("mock");
+  Child teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+                   "--max-distance", "2.0"},
+                  kQvga),
+              dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+  const auto done = last_event(teach.out(), "teach_done");
+  ASSERT_TRUE(done.is_object()) << teach.both();
+  EXPECT_EQ(done["outcome"], "finished");
+  const auto map = core::memory::load_map(dir / "map");
+  EXPECT_GE(map.key_images.size(), 2u);
+  EXPECT_EQ(map.camera.width_px, 320);
+  EXPECT_TRUE(fs::exists(dir / "map.recording" / "recording.json"));
+
+  Child replay(cat({"replay", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+                    "--mock-start", "0", "--seed", "0", "--json", (dir / "replay.jsonl").string(),
+                    "--max-frames", "900", "--mock-command-log", (dir / "commands.jsonl").string()},
+                   kQvga),
+               dir, "replay");
+  const int rc = replay.wait();
+  const auto r = last_event(replay.out(), "replay_done");
+  ASSERT_TRUE(r.is_object()) << replay.both();
+  // From the taught start the tour must be completed (exit code 0) and end stopped.
+  EXPECT_EQ(rc, 0) << replay.both();
+  EXPECT_EQ(r["outcome"], "tour_complete") << replay.both();
+  EXPECT_EQ(r["max_key_reached"].get<int>(), static_cast<int>(map.key_images.size()) - 1);
+  const auto frames = read_jsonl(dir / "replay.jsonl");
+  EXPECT_EQ(static_cast<int64_t>(frames.size()), r["frames"].get<int64_t>());
+  const auto commands = read_jsonl(dir / "commands.jsonl");
+  ASSERT_FALSE(commands.empty());
+  EXPECT_TRUE(commands.back()["stop_move"].get<bool>());
+}
+
+TEST(AppE2E, SigintDuringTeachKeepsRecordingAndStopsRobot) {
+  const fs::path dir = fresh_dir("sigint");
+  const fs::path rec = dir / "rec";
+  Child teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+                   "--recording", rec.string(), "--scripted", "--mock-command-log",
+                   (dir / "commands.jsonl").string()},
+                  kQvga),
+              dir, "teach");
+  // Wait until the drive is under way (some frames recorded), then Ctrl-C.
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < end &&
+         read_jsonl(rec / "frames.jsonl").size() < 15) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GE(read_jsonl(rec / "frames.jsonl").size(), 15u) << teach.both();
+  teach.signal(SIGINT);
+  EXPECT_EQ(teach.wait(), 130) << teach.both();
+  const auto commands = read_jsonl(dir / "commands.jsonl");
+  ASSERT_FALSE(commands.empty()) << teach.both();
+  bool moved = false;
+  for (const auto& c : commands) moved = moved || c["v_x_m_s"].get<double>() > 0.0;
+  EXPECT_TRUE(moved);
+  EXPECT_TRUE(commands.back()["stop_move"].get<bool>());
+  // The recording becomes a valid map offline.
+  Child build({"map", "build", "--recording", rec.string(), "--map", (dir / "built").string()},
+              dir, "build");
+  ASSERT_EQ(build.wait(), 0) << build.both();
+  const auto map = core::memory::load_map(dir / "built");
+  EXPECT_GE(map.key_images.size(), 2u);
+}
+
+TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
+  const fs::path dir = fresh_dir("qi");
+  auto world = std::make_shared<const mock::World>(mock::load_world(kWorldFile));
+  mock::MockRobot robot(world);
+  naoqi_bridge::qi::MockNaoqiServer server(robot);  // lockstep, tcp://127.0.0.1:ephemeral
+  server.start();
+  // Teach over the wire (the operator does not drive: a short standing tour).
+  Child teach(cat({"teach", "--robot", server.url(), "--map", (dir / "map").string(),
+                   "--max-frames", "25"},
+                  kQvga),
+              dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+  const auto map = core::memory::load_map(dir / "map");
+  EXPECT_GE(map.key_images.size(), 2u);
+  EXPECT_EQ(map.camera.width_px, 320);
+  // Replay over the wire; the robot has not moved, so it sits at the end of this tour.
+  Child replay(cat({"replay", "--robot", server.url(), "--map", (dir / "map").string(),
+                    "--max-frames", "150", "--json", (dir / "replay.jsonl").string()},
+                   kQvga),
+               dir, "replay");
+  const int rc = replay.wait();
+  const auto r = last_event(replay.out(), "replay_done");
+  ASSERT_TRUE(r.is_object()) << replay.both();
+  EXPECT_GT(r["frames"].get<int64_t>(), 0) << replay.both();
+  EXPECT_TRUE(r["outcome"] == "tour_complete" || r["outcome"] == "max_frames") << replay.both();
+  EXPECT_TRUE(rc == 0 || rc == 1);
+  const auto log = robot.command_log();
+  ASSERT_FALSE(log.empty());
+  EXPECT_TRUE(log.back().stop_move || (log.back().velocity.v_x_m_s == 0.0 &&
+                                       log.back().velocity.omega_rad_s == 0.0));
+  EXPECT_GE(server.stats().frames_served, 25u);
+  server.stop();
+}
+
+TEST(AppE2E, ConfigDumpRoundTrips) {
+  const fs::path dir = fresh_dir("config");
+  Child dump({"config", "dump", "--set", "robot.camera_fps=10"}, dir, "dump");
+  ASSERT_EQ(dump.wait(), 0) << dump.both();
+  {
+    std::ofstream f(dir / "c.yaml");
+    f << dump.out();
+  }
+  Child again({"config", "dump", "--config", (dir / "c.yaml").string()}, dir, "again");
+  ASSERT_EQ(again.wait(), 0) << again.both();
+  EXPECT_EQ(again.out(), dump.out());
+  EXPECT_NE(dump.out().find("camera_fps: 10"), std::string::npos) << dump.out();
+}
+
+TEST(AppE2E, BadOptionsRefusedBeforeConnecting) {
+  const fs::path dir = fresh_dir("badopt");
+  Child teach({"teach", "--robot", "http://nowhere", "--map", (dir / "m").string()}, dir, "t");
+  EXPECT_EQ(teach.wait(), 1);
+  EXPECT_NE(teach.err().find("robot URL"), std::string::npos) << teach.both();
+  Child bad({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "m").string(), "--set",
+             "robot.frame_timeout_ms=5"},
+            dir, "bad");
+  EXPECT_NE(bad.wait(), 0);
+  EXPECT_NE(bad.err().find("frame_timeout_ms"), std::string::npos) << bad.both();
+  EXPECT_FALSE(fs::exists(dir / "m.recording"));
+}
+
+}  // namespace
+}  // namespace pepper::app

@@ -1,0 +1,280 @@
+// Safety of the teach and replay session loops (issue 6), in-process on the mock robot
+// (MockRobot + MockBridge): every way out of a loop ends with a stop sent to the base.
+// The core is replaced by a scripted step function where a fault must be injected.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include "naoqi_bridge/mock/mock_bridge.hpp"
+#include "session/recording.hpp"
+#include "session/replay_session.hpp"
+#include "session/signals.hpp"
+#include "session/teach_session.hpp"
+
+namespace pepper::app {
+namespace {
+
+namespace nb = naoqi_bridge;
+namespace nav = core::navigator;
+
+const std::string kWorld = std::string("mock:") + PEPPER_SOURCE_DIR + "/worlds/robotics_room.yaml";
+
+std::filesystem::path fresh_dir(const std::string& name) {
+  auto p = std::filesystem::temp_directory_path() / ("pepper_session_test_" + name);
+  std::filesystem::remove_all(p);
+  return p;
+}
+
+nb::CameraRequest qvga() {
+  nb::CameraRequest r;
+  r.width_px = 320;
+  r.height_px = 240;
+  return r;
+}
+
+/// A map whose camera matches the mock's QVGA camera; its key images are never used because the
+/// tests replace the navigator's step.
+core::memory::VisualMemory dummy_map(const RobotConnection& robot) {
+  core::memory::VisualMemory m;
+  m.camera = robot.mock->intrinsics(320, 240);
+  m.key_images.resize(2);
+  return m;
+}
+
+/// Moves forward every frame (a navigator that is happily driving).
+nav::StepResult driving_step(const core::Frame& f) {
+  nav::StepResult r;
+  r.command = {0.2, 0.05, false, nav::StopReason::kNone};
+  r.telemetry.t_ns = f.t_ns;
+  r.telemetry.state = nav::NavState::kNavigating;
+  r.telemetry.in = 1;
+  return r;
+}
+
+bool last_is_stop(const nb::mock::MockRobot& robot) {
+  const auto log = robot.command_log();
+  if (log.empty()) return false;
+  const auto& c = log.back();
+  return c.stop_move || (c.velocity.v_x_m_s == 0.0 && c.velocity.omega_rad_s == 0.0);
+}
+
+bool ever_moved(const nb::mock::MockRobot& robot) {
+  for (const auto& c : robot.command_log())
+    if (!c.stop_move && c.velocity.v_x_m_s > 0.0) return true;
+  return false;
+}
+
+ReplaySessionOptions replay_options() {
+  ReplaySessionOptions o;
+  o.camera = qvga();
+  o.frame_timeout_ms = 200;
+  o.max_frames = 200;  // a broken test ends anyway
+  return o;
+}
+
+TEST(ReplaySessionSafety, ExceptionFromCoreEndsWithStop) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  int n = 0;
+  const ReplayResult r = run_replay_session(
+      robot, dummy_map(robot), replay_options(), link, [&](const core::Frame& f) {
+        if (++n == 6) throw std::runtime_error("injected core failure");
+        return driving_step(f);
+      });
+  EXPECT_EQ(r.outcome, "error");
+  EXPECT_NE(r.error.find("injected"), std::string::npos);
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+/// Delivers `good_frames` frames, then none (a camera that stalls).
+class StallingBridge final : public nb::RobotBridge {
+ public:
+  StallingBridge(std::unique_ptr<nb::RobotBridge> inner, int good_frames)
+      : inner_(std::move(inner)), left_(good_frames) {}
+  void connect() override { inner_->connect(); }
+  core::CameraIntrinsics start_camera(const nb::CameraRequest& r) override {
+    return inner_->start_camera(r);
+  }
+  std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override {
+    if (left_-- > 0) return inner_->next_frame(timeout);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return std::nullopt;
+  }
+  nb::HeadLockStatus lock_head(const nb::HeadLockRequest& r) override {
+    return inner_->lock_head(r);
+  }
+  void move(const nb::BaseVelocity& v) override { inner_->move(v); }
+  void stop() noexcept override { inner_->stop(); }
+  void release() noexcept override { inner_->release(); }
+  nb::ConnectionState state() const override { return inner_->state(); }
+  std::string describe() const override { return "stalling " + inner_->describe(); }
+
+ private:
+  std::unique_ptr<nb::RobotBridge> inner_;
+  int left_;
+};
+
+TEST(ReplaySessionSafety, StalledFramesStop) {
+  RobotConnection robot = open_robot(kWorld, {});
+  robot.bridge = std::make_unique<StallingBridge>(std::move(robot.bridge), 8);
+  SessionLink link(nullptr, nullptr);
+  const ReplayResult r =
+      run_replay_session(robot, dummy_map(robot), replay_options(), link, driving_step);
+  EXPECT_EQ(r.outcome, "frame_timeout");
+  EXPECT_EQ(r.frames, 8);
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+TEST(ReplaySessionSafety, UiStopStops) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  int frames = 0;
+  bool pressed = false;
+  link.set_intent_source([&]() -> std::optional<teach_ui::Intent> {
+    if (frames < 10 || pressed) return std::nullopt;
+    pressed = true;
+    teach_ui::Intent i;
+    i.kind = teach_ui::IntentKind::kEmergencyStop;
+    i.reason = "button";
+    return i;
+  });
+  const ReplayResult r = run_replay_session(robot, dummy_map(robot), replay_options(), link,
+                                            [&](const core::Frame& f) {
+                                              ++frames;
+                                              return driving_step(f);
+                                            });
+  EXPECT_EQ(r.outcome, "ui_stop");
+  EXPECT_EQ(r.frames, 10);
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+TEST(ReplaySessionSafety, InterruptFlagStops) {
+  reset_interrupt();
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  int n = 0;
+  const ReplayResult r = run_replay_session(robot, dummy_map(robot), replay_options(), link,
+                                            [&](const core::Frame& f) {
+                                              if (++n == 7) request_interrupt();
+                                              return driving_step(f);
+                                            });
+  reset_interrupt();
+  EXPECT_EQ(r.outcome, "interrupted");
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+TEST(ReplaySessionSafety, NavigatorStopReasonSendsStop) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  int n = 0;
+  ReplaySessionOptions o = replay_options();
+  o.max_frames = 12;
+  const ReplayResult r =
+      run_replay_session(robot, dummy_map(robot), o, link, [&](const core::Frame& f) {
+        nav::StepResult s = driving_step(f);
+        if (++n > 5) s.command = {0.0, 0.0, true, nav::StopReason::kFeaturesLost};
+        return s;
+      });
+  EXPECT_EQ(r.outcome, "max_frames");
+  const auto log = robot.mock->command_log();
+  ASSERT_GE(log.size(), 6u);
+  EXPECT_TRUE(log.back().stop_move);
+}
+
+TEST(ReplaySessionSafety, WrongCameraSizeRefusedBeforeMoving) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  core::memory::VisualMemory map = dummy_map(robot);
+  map.camera = robot.mock->intrinsics(640, 480);
+  const ReplayResult r = run_replay_session(robot, map, replay_options(), link, driving_step);
+  EXPECT_EQ(r.outcome, "error");
+  EXPECT_NE(r.error.find("640x480"), std::string::npos) << r.error;
+  EXPECT_FALSE(ever_moved(*robot.mock));
+}
+
+TeachSessionOptions teach_options(const std::string& name) {
+  TeachSessionOptions o;
+  o.map_dir = fresh_dir(name + "_map");
+  o.recording_dir = fresh_dir(name + "_rec");
+  o.camera = qvga();
+  return o;
+}
+
+TEST(TeachSessionSafety, InterruptStopsKeepsRecordingAndSavesMap) {
+  reset_interrupt();
+  RobotConnection robot = open_robot(kWorld, {});
+  TeachSessionOptions o = teach_options("interrupt");
+  o.scripted = true;
+  SessionLink link(nullptr, nullptr);
+  int polls = 0;
+  link.set_intent_source([&]() -> std::optional<teach_ui::Intent> {
+    if (++polls == 25) request_interrupt();  // about 24 frames into the drive
+    return std::nullopt;
+  });
+  const TeachResult r = run_teach_session(robot, o, link);
+  reset_interrupt();
+  EXPECT_EQ(r.outcome, "interrupted");
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+  EXPECT_TRUE(r.map_saved);
+  const Recording rec = read_recording(o.recording_dir, std::nullopt);
+  EXPECT_EQ(static_cast<int64_t>(rec.frames.size()), r.frames_recorded);
+  EXPECT_GE(rec.frames.size(), 20u);
+  const auto map = core::memory::load_map(o.map_dir);
+  EXPECT_GE(map.key_images.size(), 2u);
+}
+
+TEST(TeachSessionSafety, OperatorDriveNeedsRefreshing) {
+  RobotConnection robot = open_robot(kWorld, {});
+  TeachSessionOptions o = teach_options("deadman");
+  o.max_frames = 40;
+  o.pace_hz = 50;           // 40 frames = 0.8 s of wall time
+  o.drive_timeout_s = 0.1;  // one drive intent, never refreshed
+  SessionLink link(nullptr, nullptr);
+  bool sent = false;
+  link.set_intent_source([&]() -> std::optional<teach_ui::Intent> {
+    if (sent) return std::nullopt;
+    sent = true;
+    teach_ui::Intent i;
+    i.kind = teach_ui::IntentKind::kDrive;
+    i.v_m_s = 0.1;
+    return i;
+  });
+  const TeachResult r = run_teach_session(robot, o, link);
+  EXPECT_EQ(r.outcome, "finished");
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  // The dead-man stopped it long before the end of the session: a stop follows the move.
+  const auto log = robot.mock->command_log();
+  int moves = 0;
+  for (const auto& c : log) moves += (!c.stop_move && c.velocity.v_x_m_s > 0) ? 1 : 0;
+  EXPECT_LT(moves, 30);
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+TEST(TeachSessionSafety, ScriptedNeedsMockRobot) {
+  RobotConnection robot = open_robot(kWorld, {});
+  const auto keep_alive = robot.mock;  // the bridge refers to it
+  robot.mock.reset();                   // pretend it is a real robot
+  TeachSessionOptions o = teach_options("scripted_real");
+  o.scripted = true;
+  SessionLink link(nullptr, nullptr);
+  EXPECT_THROW(run_teach_session(robot, o, link), std::invalid_argument);
+}
+
+TEST(RobotUrl, ParsesAndNormalises) {
+  EXPECT_EQ(parse_robot_url("tcp://10.0.0.5").url, "tcp://10.0.0.5:9559");
+  EXPECT_EQ(parse_robot_url("tcps://pepper.local").kind, RobotUrl::Kind::kTcps);
+  EXPECT_EQ(parse_robot_url("mock:w.yaml").world_file, "w.yaml");
+  EXPECT_THROW(parse_robot_url("http://x"), std::invalid_argument);
+  EXPECT_THROW(parse_robot_url("mock:"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pepper::app

@@ -1,0 +1,129 @@
+// End-to-end browser test of the real app (issue 6): `pepper_app teach` and `pepper_app replay`
+// on the in-process mock robot with the teach UI, driven by Debian's chromium through
+// playwright-core (tests/ui/lib.mjs). Checks: the page loads and connects, the live image
+// advances, holding the Up arrow makes the mock robot move (the app logs every base command as a
+// JSON line on stdout: {"event":"command","v_m_s":...,"stop":false}) and releasing it stops it,
+// the Finish button ends the teach with a saved map, and STOP stops a running replay.
+// Screenshots go to --artifacts (git-ignored).
+//
+//   node tests/ui/app_e2e_test.mjs --app build-app/pepper_app/pepper_app \
+//        --world worlds/robotics_room.yaml [--artifacts tests/ui/artifacts] [--echo]
+import { spawnSync } from 'node:child_process';
+import { mkdtempSync, rmSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import {
+  HERE, parseArgs, startServer, launchBrowser, ensureDir, makeRunner, expectConnected,
+  expectFramesAdvance, holdKey, sleep,
+} from './lib.mjs';
+
+const opts = parseArgs(process.argv.slice(2), {
+  app: join(HERE, '..', '..', 'build', 'pepper_app', 'pepper_app'),
+  world: join(HERE, '..', '..', 'worlds', 'robotics_room.yaml'),
+  artifacts: join(HERE, 'artifacts'),
+});
+const echo = opts.echo === true;
+const QVGA = ['--set', 'robot.camera_width_px=320', '--set', 'robot.camera_height_px=240'];
+const artifacts = ensureDir(opts.artifacts);
+const work = mkdtempSync(join(tmpdir(), 'pepper-app-e2e-'));
+const run = makeRunner();
+
+const isCommand = (pred) => (e) => e.event === 'command' && pred(e);
+
+async function teachStep() {
+  const server = await startServer(opts.app, ['teach', '--robot', `mock:${opts.world}`,
+    '--map', join(work, 'ui_map'), '--manual', '--ui-port', '0', ...QVGA], { echo });
+  const browser = await launchBrowser();
+  const { page } = browser;
+  try {
+    await run.step('teach page loads and connects', async () => {
+      await page.goto(server.url);
+      await expectConnected(page);
+    });
+    await run.step('live image from the mock robot advances', async () => {
+      const fps = await expectFramesAdvance(page, 8);
+      return `${fps.toFixed(1)} frames/s drawn`;
+    });
+    await run.step('holding Up moves the mock robot, releasing it stops it', async () => {
+      let from = server.events.length;
+      const r = await holdKey(page, 'ArrowUp', 800,
+        () => server.waitForEvent(isCommand((e) => !e.stop && e.v_m_s > 0),
+          { from, what: 'a forward base command' }),
+        () => {
+          from = server.events.length;
+          return server.waitForEvent(isCommand((e) => e.stop), { from, what: 'a stop command' });
+        });
+      return `drove at ${r.held.v_m_s} m/s, then stop (${r.released.why})`;
+    });
+    await run.step('holding Left turns the mock robot left', async () => {
+      const from = server.events.length;
+      await holdKey(page, 'ArrowLeft', 400,
+        () => server.waitForEvent(isCommand((e) => !e.stop && e.omega_rad_s > 0),
+          { from, what: 'a left-turn command' }),
+        () => server.waitForEvent(isCommand((e) => e.stop),
+          { from: server.events.length, what: 'a stop command' }));
+    });
+    await run.step('screenshot of the live teach page', async () => {
+      await sleep(300);
+      const file = join(artifacts, 'app_teach.png');
+      await page.screenshot({ path: file, fullPage: true });
+      return file;
+    });
+    await run.step('Finish ends the teach with a saved map', async () => {
+      await page.click('#btn-finish');
+      const done = await server.waitForEvent((e) => e.event === 'teach_done',
+        { timeoutMs: 30000, what: 'teach_done' });
+      if (done.outcome !== 'finished' || !done.map_saved) throw new Error(JSON.stringify(done));
+    });
+  } finally {
+    await browser.close();
+    await server.stop();
+  }
+}
+
+async function replayStep() {
+  // A short scripted tour to replay (no browser needed for it).
+  const mapDir = join(work, 'tour');
+  const t = spawnSync(opts.app, ['teach', '--robot', `mock:${opts.world}`, '--map', mapDir,
+    '--max-distance', '2.0', ...QVGA], { encoding: 'utf8' });
+  if (t.status !== 0) throw new Error(`scripted teach failed:\n${t.stderr}`);
+  const server = await startServer(opts.app, ['replay', '--robot', `mock:${opts.world}`,
+    '--map', mapDir, '--ui-port', '0', '--mock-start', '0', '--seed', '0', ...QVGA], { echo });
+  const browser = await launchBrowser();
+  const { page } = browser;
+  try {
+    await run.step('replay page connects and the robot drives by itself', async () => {
+      await page.goto(server.url);
+      await expectConnected(page);
+      await server.waitForEvent(isCommand((e) => !e.stop && e.v_m_s > 0),
+        { timeoutMs: 30000, what: 'the navigator driving' });
+      await expectFramesAdvance(page, 5);
+    });
+    await run.step('screenshot of the replay page', async () => {
+      const file = join(artifacts, 'app_replay.png');
+      await page.screenshot({ path: file, fullPage: true });
+      return file;
+    });
+    await run.step('STOP stops the replay', async () => {
+      const from = server.events.length;
+      await page.click('#estop');
+      const done = await server.waitForEvent((e) => e.event === 'replay_done',
+        { from, timeoutMs: 10000, what: 'replay_done' });
+      if (done.outcome !== 'ui_stop') throw new Error(`outcome ${done.outcome}`);
+      await server.waitForEvent(isCommand((e) => e.stop), { from, what: 'a stop command' });
+    });
+  } finally {
+    await browser.close();
+    await server.stop();
+  }
+}
+
+try {
+  if (!existsSync(opts.app)) throw new Error(`no app binary at ${opts.app} (--app)`);
+  await run.step('teach session in the browser', teachStep);
+  await run.step('replay session in the browser', replayStep);
+} catch (e) {
+  console.log(`FAIL setup: ${e.stack || e}`);
+}
+rmSync(work, { recursive: true, force: true });
+process.exit(run.finish());
