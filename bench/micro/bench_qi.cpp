@@ -6,11 +6,13 @@
 //
 // The served robot returns one precomputed frame (no rendering) so the figures measure the
 // protocol path: server encode + loopback TCP/TLS + client decode.
+// BM_WatchdogStopLatency: how long after the app's last move() the robot receives the stop.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <thread>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -144,6 +146,48 @@ void move_round_trip(benchmark::State& state, bool tls) {
 void BM_MoveRoundTripTcp(benchmark::State& s) { move_round_trip(s, false); }
 void BM_MoveRoundTripTlsLogin(benchmark::State& s) { move_round_trip(s, true); }
 
+/// Watchdog: time from the app's last move() until the robot (server side) receives the stop,
+/// with the default 300 ms watchdog. Wall clock, polled every 0.5 ms on the server's command log.
+void BM_WatchdogStopLatency(benchmark::State& state) {
+  Fixture fx(false);
+  qi::QiBridgeOptions o;
+  o.url = fx.server.url();
+  o.head_resend_period = std::chrono::milliseconds(0);
+  qi::QiBridge bridge(o);
+  bridge.connect();
+  std::vector<double> ms;
+  for (auto _ : state) {
+    bridge.move({0.1, 0.0, 0.0});
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::size_t seen = fx.robot.command_log().size();
+    double latency_ms = -1.0;
+    while (latency_ms < 0.0) {
+      std::this_thread::sleep_for(std::chrono::microseconds(500));
+      const auto elapsed = std::chrono::steady_clock::now() - t0;
+      const auto log = fx.robot.command_log();
+      for (std::size_t i = seen; i < log.size(); ++i) {
+        const auto& v = log[i].velocity;
+        if (log[i].stop_move || (v.v_x_m_s == 0.0 && v.v_y_m_s == 0.0 && v.omega_rad_s == 0.0)) {
+          latency_ms = std::chrono::duration<double, std::milli>(elapsed).count();
+          break;
+        }
+      }
+      if (elapsed > std::chrono::seconds(5)) {
+        state.SkipWithError("no stop within 5 s");
+        return;
+      }
+    }
+    ms.push_back(latency_ms);
+    state.SetIterationTime(latency_ms / 1000.0);
+  }
+  std::sort(ms.begin(), ms.end());
+  if (!ms.empty()) {
+    state.counters["p50_ms"] = ms[ms.size() / 2];
+    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+    state.counters["max_ms"] = ms.back();
+  }
+}
+
 std::shared_ptr<const std::vector<std::uint8_t>> vga_reply_payload() {
   qi::ImageRemote img;
   img.width_px = 640;
@@ -187,6 +231,7 @@ BENCHMARK(BM_GetImageRemoteQvgaGreyTcp)->Unit(benchmark::kMillisecond)->UseRealT
 BENCHMARK(BM_QiBridgeNextFrameVgaPipelined)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MoveRoundTripTcp)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_MoveRoundTripTlsLogin)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_WatchdogStopLatency)->UseManualTime()->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DecodeImageRemoteVgaView)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DecodeImageRemoteVgaToMat)->Unit(benchmark::kMicrosecond);
 
