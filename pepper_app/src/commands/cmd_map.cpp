@@ -4,6 +4,7 @@
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
+#include "config/app_config.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "offline/offline_jobs.hpp"
 
@@ -21,6 +22,8 @@ struct MapBuildArgs {
   std::string camera;
   bool every_frame_key = false;
   double fps = 15.0;
+  std::string config_file;
+  std::vector<std::string> sets;
 };
 
 int run_map_info(const MapInfoArgs& a) {
@@ -39,6 +42,7 @@ int run_map_info(const MapInfoArgs& a) {
 
 int run_map_build(const MapBuildArgs& a) {
   try {
+    const AppConfig config = load_app_config(a.config_file, a.sets);
     const auto camera = load_camera_option(a.camera);
     const Recording rec = read_recording(a.recording, camera, a.fps);
     for (const auto& w : rec.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
@@ -46,7 +50,7 @@ int run_map_build(const MapBuildArgs& a) {
               << rec.source << ")\n";
     ProgressLine progress(a.every_frame_key ? "features" : "key-image selection");
     const core::memory::VisualMemory map = build_map_from_recording(
-        rec, core::mapping::TeachOptions{}, a.every_frame_key, "{}",
+        rec, config.teach_options(), a.every_frame_key, config_to_json(config).dump(),
         [&](std::size_t done, std::size_t total) { progress.update(done, total); });
     progress.finish();
     core::memory::save_map(map, a.map);
@@ -88,9 +92,13 @@ void register_map_command(CLI::App& app) {
                   "Take every image as a key image (maps made elsewhere)");
   build->add_option("--fps", build_args->fps, "Nominal frame rate of a plain image folder")
       ->check(CLI::PositiveNumber);
+  build->add_option("--config", build_args->config_file, "Configuration file (YAML/JSON)");
+  build->add_option("--set", build_args->sets,
+                    "Override one parameter, e.g. --set key_images.epsilon=60 (repeatable)");
   build->footer(
       "Examples:\n"
       "  pepper_app map build --recording rec/lab_tour --map maps/lab_tour\n"
+      "  pepper_app map build --recording rec/lab_tour --map maps/eps60 --set key_images.epsilon=60\n"
       "  pepper_app map build --recording ../shared/data/pepper_qut_tmap/Edge_01 \\\n"
       "      --camera pepper_qvga.yaml --every-frame-key --map maps/edge01");
   build->callback([build_args] { exit_code() = run_map_build(*build_args); });

@@ -7,6 +7,7 @@
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
+#include "config/app_config.hpp"
 #include "offline/offline_jobs.hpp"
 
 namespace pepper::app {
@@ -19,17 +20,20 @@ struct ReplayLogArgs {
   std::string json_out;
   double fps = 15.0;
   bool quiet = false;
+  std::string config_file;
+  std::vector<std::string> sets;
 };
 
 int run_replay_log(const ReplayLogArgs& a) {
   try {
+    const AppConfig config = load_app_config(a.config_file, a.sets);
     core::memory::VisualMemory map = core::memory::load_map(a.map);
     const auto camera = load_camera_option(a.camera);
     const Recording rec = read_recording(a.recording, camera ? camera : map.camera, a.fps);
     for (const auto& w : rec.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
     ProgressLine progress("replay-log");
     const ReplayLogResult result =
-        replay_log(rec, std::move(map), core::navigator::NavigatorOptions{},
+        replay_log(rec, std::move(map), config.navigator_options(),
                    [&](std::size_t done, std::size_t total) { progress.update(done, total); });
     progress.finish();
     if (!a.quiet) {
@@ -77,6 +81,9 @@ void register_replay_log_command(CLI::App& app) {
   cmd->add_option("--fps", args->fps, "Nominal frame rate of a plain image folder")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("-q,--quiet", args->quiet, "Print the summary only");
+  cmd->add_option("--config", args->config_file, "Configuration file (YAML/JSON)");
+  cmd->add_option("--set", args->sets,
+                  "Override one parameter, e.g. --set navigator.ibvs.features=lines (repeatable)");
   cmd->footer("Example:\n  pepper_app replay-log --recording rec/replay1 --map maps/lab_tour "
               "--json replay1.json");
   cmd->callback([args] { exit_code() = run_replay_log(*args); });
