@@ -1,5 +1,6 @@
 #include "core/mapping/key_image_selector.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace pepper::core::mapping {
@@ -12,6 +13,10 @@ std::vector<std::string> KeyImageSelectorOptions::validate() const {
   if (min_frame_gap < 1) {
     errors.push_back("mapping.min_frame_gap = " + std::to_string(min_frame_gap) + " must be >= 1");
   }
+  if (!(relative >= 0.0 && relative < 1.0)) {
+    errors.push_back("mapping.relative = " + std::to_string(relative) +
+                     " must be in [0, 1) (0: absolute epsilon only)");
+  }
   return errors;
 }
 
@@ -19,6 +24,7 @@ KeyImageSelector::KeyImageSelector(const KeyImageSelectorOptions& options) : opt
   if (const auto errors = options_.validate(); !errors.empty()) {
     throw std::invalid_argument("KeyImageSelector: " + errors.front());
   }
+  threshold_ = options_.epsilon;
 }
 
 std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count) {
@@ -28,11 +34,21 @@ std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count) {
                                 " after " + std::to_string(last_));
   }
   last_ = c;
-  if (count >= options_.epsilon) return std::nullopt;
+  if (options_.relative > 0.0 && c == key_ + 2) {
+    reference_ = count;
+    threshold_ = std::max<double>(options_.epsilon, options_.relative * count);
+  }
+  last_threshold_ = threshold_;
+  last_reference_ = reference_;
+  if (count >= threshold_) return std::nullopt;
   const int64_t candidate = (c - 1 == key_) ? c : c - 1;
   if (candidate - key_ < options_.min_frame_gap) return std::nullopt;
   key_ = candidate;
   keys_.push_back(key_);
+  // A new key image: its reference is measured again two frames later (when key_ == c, the
+  // scene changed within one frame; the same rule applies from c).
+  reference_ = -1;
+  threshold_ = options_.epsilon;
   return key_;
 }
 

@@ -69,7 +69,10 @@ TeachStep Teacher::add_frame(const Frame& frame) {
     }
     step.n_points_two_view = fm.two_view(kKeyId, key_->features).n_points();
     step.count = step.n_lines_three_view + step.n_points_two_view;
-    if (const auto k = selector_.on_frame(frames_, step.count)) {
+    const auto k = selector_.on_frame(frames_, step.count);
+    step.threshold = selector_.last_threshold();
+    step.reference_count = selector_.last_reference();
+    if (k) {
       step.new_key_frame = *k;
       key_ = (*k == frames_) ? cur : *prev_;
       store_key(*key_);

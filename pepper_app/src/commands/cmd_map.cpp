@@ -24,6 +24,7 @@ struct MapBuildArgs {
   double fps = 15.0;
   std::string config_file;
   std::vector<std::string> sets;
+  std::string steps_csv;
 };
 
 int run_map_info(const MapInfoArgs& a) {
@@ -49,10 +50,15 @@ int run_map_build(const MapBuildArgs& a) {
     std::cerr << "map build: " << rec.frames.size() << " frames from " << a.recording << " ("
               << rec.source << ")\n";
     ProgressLine progress(a.every_frame_key ? "features" : "key-image selection");
+    std::vector<core::mapping::TeachStep> steps;
     const core::memory::VisualMemory map = build_map_from_recording(
         rec, config.teach_options(), a.every_frame_key, config_to_json(config).dump(),
-        [&](std::size_t done, std::size_t total) { progress.update(done, total); });
+        [&](std::size_t done, std::size_t total) { progress.update(done, total); }, &steps);
     progress.finish();
+    if (!a.steps_csv.empty()) {
+      write_teach_steps_csv(steps, a.steps_csv);
+      std::cerr << "per-frame teach counts written to " << a.steps_csv << "\n";
+    }
     core::memory::save_map(map, a.map);
     std::cout << core::memory::summarize(map).to_text();
     std::cout << "map written to " << a.map << "\n";
@@ -95,6 +101,9 @@ void register_map_command(CLI::App& app) {
   build->add_option("--config", build_args->config_file, "Configuration file (YAML/JSON)");
   build->add_option("--set", build_args->sets,
                     "Override one parameter, e.g. --set key_images.epsilon=60 (repeatable)");
+  build->add_option("--steps-csv", build_args->steps_csv,
+                    "Write the per-frame counts of the teach rule (nL, nP, threshold, key images) "
+                    "as CSV");
   build->footer(
       "Examples:\n"
       "  pepper_app map build --recording rec/lab_tour --map maps/lab_tour\n"

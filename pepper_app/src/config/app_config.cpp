@@ -101,6 +101,7 @@ template <class V> void visit(V& v, cf::MatcherOptions& o) {
 template <class V> void visit(V& v, cm::KeyImageSelectorOptions& o) {
   v("epsilon", o.epsilon);
   v("min_frame_gap", o.min_frame_gap);
+  v("relative", o.relative);
 }
 template <class V> void visit(V& v, cc::IbvsOptions& o) {
   v.enumeration("features", o.mode, feature_mode_names());

@@ -1,6 +1,7 @@
 #include "offline/offline_jobs.hpp"
 
 #include <algorithm>
+#include <fstream>
 #include <stdexcept>
 
 #include "session/telemetry_json.hpp"
@@ -30,7 +31,8 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
                                                     const core::mapping::TeachOptions& options,
                                                     bool every_frame_key,
                                                     const std::string& parameters_json,
-                                                    const ProgressFn& progress) {
+                                                    const ProgressFn& progress,
+                                                    std::vector<core::mapping::TeachStep>* steps) {
   const std::size_t total = recording.frames.size();
   const core::Frame first = load_frame(recording, 0);
   const cv::Size size = first.gray.size();
@@ -59,10 +61,24 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
   for (std::size_t i = 0; i < total; ++i) {
     const core::Frame frame = i == 0 ? first : load_frame(recording, i);
     check_size(frame, size, recording, i);
-    teacher.add_frame(frame);
+    const core::mapping::TeachStep step = teacher.add_frame(frame);
+    if (steps) steps->push_back(step);
     if (progress) progress(i + 1, total);
   }
   return teacher.finish(parameters_json);
+}
+
+void write_teach_steps_csv(const std::vector<core::mapping::TeachStep>& steps,
+                           const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot open for writing");
+  out << "frame,n_lines_3v,n_points_2v,count,reference,new_key,key_images\n";
+  for (const auto& s : steps) {
+    out << s.frame_number << ',' << s.n_lines_three_view << ',' << s.n_points_two_view << ','
+        << s.count << ',' << s.reference_count << ',' << (s.new_key_frame ? *s.new_key_frame : -1)
+        << ',' << s.key_image_count << '\n';
+  }
+  if (!out) throw std::runtime_error(path + ": write failed");
 }
 
 nlohmann::json ReplayLogResult::to_json() const {

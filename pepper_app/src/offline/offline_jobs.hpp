@@ -22,11 +22,15 @@ using ProgressFn = std::function<void(std::size_t done, std::size_t total)>;
 /// Key images by the teach rule (core/mapping) over the recording's frames, or every frame a key
 /// image when `every_frame_key` (maps made elsewhere). Frames whose size differs from the first
 /// frame's are an error naming the file. The camera is scaled to the frames' size when needed.
-core::memory::VisualMemory build_map_from_recording(const Recording& recording,
-                                                    const core::mapping::TeachOptions& options,
-                                                    bool every_frame_key,
-                                                    const std::string& parameters_json,
-                                                    const ProgressFn& progress = {});
+/// `steps`, when given, receives the teach rule's per-frame counts (not with every_frame_key).
+core::memory::VisualMemory build_map_from_recording(
+    const Recording& recording, const core::mapping::TeachOptions& options, bool every_frame_key,
+    const std::string& parameters_json, const ProgressFn& progress = {},
+    std::vector<core::mapping::TeachStep>* steps = nullptr);
+
+/// The teach steps as CSV: frame,n_lines_3v,n_points_2v,count,reference,new_key,key_images.
+void write_teach_steps_csv(const std::vector<core::mapping::TeachStep>& steps,
+                           const std::string& path);
 
 struct ReplayLogFrame {
   int64_t frame_index = 0;

@@ -43,6 +43,33 @@ TEST(KeyImageSelector, MinFrameGap) {
   EXPECT_EQ(o.validate().size(), 1u);
 }
 
+TEST(KeyImageSelector, RelativeThresholdFollowsEachKeyImagesReference) {
+  KeyImageSelectorOptions o;
+  o.epsilon = 20;
+  o.min_frame_gap = 3;
+  o.relative = 0.5;
+  KeyImageSelector s(o);
+  EXPECT_EQ(s.threshold(), 20.0);      // reference not known yet: epsilon
+  EXPECT_FALSE(s.on_frame(1, 300));
+  EXPECT_FALSE(s.on_frame(2, 200));    // frame key + 2: reference 200 -> threshold 100
+  EXPECT_EQ(s.reference(), 200);
+  EXPECT_EQ(s.threshold(), 100.0);
+  EXPECT_FALSE(s.on_frame(3, 120));
+  EXPECT_FALSE(s.on_frame(4, 100));    // equal: not below
+  EXPECT_EQ(*s.on_frame(5, 99), 4);    // below half the reference: Ic-1 = 4
+  EXPECT_EQ(s.last_threshold(), 100.0);
+  EXPECT_EQ(s.reference(), -1);        // new key image: reference measured again
+  EXPECT_EQ(s.threshold(), 20.0);
+  EXPECT_FALSE(s.on_frame(6, 30));     // key 4 + 2: reference 30 -> threshold max(20, 15)
+  EXPECT_EQ(s.threshold(), 20.0);      // the absolute floor wins on a poor image
+  EXPECT_FALSE(s.on_frame(7, 20));
+  EXPECT_EQ(*s.on_frame(8, 19), 7);
+  o.relative = 1.0;
+  EXPECT_EQ(o.validate().size(), 1u);
+  o.relative = -0.1;
+  EXPECT_EQ(o.validate().size(), 1u);
+}
+
 TEST(KeyImageSelector, LastFrameAlreadyKeyAndBadInput) {
   KeyImageSelectorOptions paper;
   paper.min_frame_gap = 1;

@@ -6,13 +6,15 @@
 // Frames are numbered 0, 1, 2, ... Frame 0 is the first key image. For each new frame c >= 1
 // the caller computes, against the current key image k = key():
 //     count = nL(Ik, Ic-1, Ic) + nP(Ik, Ic)
-// and calls on_frame(c, count). When count < epsilon (and c-1 is at least min_frame_gap frames
+// and calls on_frame(c, count). When count < threshold (and c-1 is at least min_frame_gap frames
 // after the key image), frame c-1 becomes the new key image
 // (tracking restarts from it at frame c+1). Special case: if c-1 is the key image itself (the
 // scene changed completely within one frame), frame c becomes the key image instead, so the
 // tour is never left without a reference. finish(last) marks the last frame as the final key
 // image (unless it already is the key image).
 //
+// threshold = epsilon (the paper), or with `relative` > 0 max(epsilon, relative * the count at
+// frame k + 2 of the current key image k): see the option and docs/method/teach.md.
 // Key-image indices strictly increase. Not thread-safe. Invalid options or frame numbers that
 // do not increase by one throw std::invalid_argument.
 
@@ -35,6 +37,11 @@ struct KeyImageSelectorOptions {
   /// three frames cannot be switched through in time and the robot lags in turns
   /// (docs/method/teach.md). A count below epsilon earlier than this is ignored.
   int min_frame_gap = 3;
+  /// Relative threshold (not in the paper; 0 = off, the paper's absolute rule). When > 0 the
+  /// threshold for key image k is max(epsilon, relative * reference_k), where reference_k is the
+  /// count at frame k + 2 (the first frame that has three distinct views Ik, Ic-1, Ic). The
+  /// threshold then follows the image size and the texture of each place.
+  double relative = 0.0;
   std::vector<std::string> validate() const;
 };
 
@@ -51,6 +58,14 @@ class KeyImageSelector {
   /// final key image's frame number when it is new.
   std::optional<int64_t> finish();
 
+  /// The threshold currently in force (epsilon until the reference count is known).
+  double threshold() const { return threshold_; }
+  /// The reference count of the current key image (-1 until known, or when relative is off).
+  int reference() const { return reference_; }
+  /// Threshold and reference that the last on_frame compared its count with.
+  double last_threshold() const { return last_threshold_; }
+  int last_reference() const { return last_reference_; }
+
   /// All key image frame numbers so far, increasing.
   const std::vector<int64_t>& key_images() const { return keys_; }
 
@@ -59,6 +74,10 @@ class KeyImageSelector {
   int64_t key_ = 0;
   int64_t last_ = 0;
   bool finished_ = false;
+  int reference_ = -1;
+  double threshold_ = 0.0;
+  double last_threshold_ = 0.0;
+  int last_reference_ = -1;
   std::vector<int64_t> keys_{0};
 };
 

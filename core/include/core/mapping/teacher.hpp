@@ -41,7 +41,9 @@ struct TeachStep {
   int64_t frame_number = 0;              ///< 0-based position in this teach sequence
   int n_lines_three_view = 0;            ///< nL(Ik, Ic-1, Ic) (0 for the first frame)
   int n_points_two_view = 0;             ///< nP(Ik, Ic)
-  int count = 0;                         ///< their sum, compared with epsilon
+  int count = 0;                         ///< their sum, compared with the threshold
+  double threshold = 0.0;                ///< the selector's threshold for this frame
+  int reference_count = -1;              ///< relative rule: the key image's reference count
   std::optional<int64_t> new_key_frame;  ///< frame number of a key image taken at this step
   int key_image_count = 0;               ///< key images so far
 };
