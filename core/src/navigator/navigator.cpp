@@ -376,8 +376,8 @@ StepResult Navigator::step(const Frame& frame) {
       // the scale guard blocks, the paper's rules do not matter; n(IP, Ia) matters only if
       // n(Ia, INN) > n(Ia, IN); the three-view counts only if the two-view rule fails.
       const auto& sw = options_.switching;
-      const bool guard_blocks =
-          sw.min_next_scale_ratio > 0.0 && !(counts.next_scale_ratio >= sw.min_next_scale_ratio);
+      const bool guard_blocks = sw.min_next_scale_ratio > 0.0 &&
+                                counts.next_scale_ratio < sw.min_next_scale_ratio;  // NaN: false
       if (!guard_blocks) {
         bool two_view_rule = false;
         if (counts.two_view_next_next > counts.two_view_next) {

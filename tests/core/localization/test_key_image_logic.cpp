@@ -140,25 +140,34 @@ TEST(KeyImageSwitcher, ConfigurableStreakAndValidation) {
 }
 
 TEST(KeyImageSwitcher, ScaleGuardAndPassedNext) {
-  KeyImageSwitcher s(segment_ending_at(1, 5), 5);  // defaults: guard 0.9, passed 1.05
+  KeyImageSwitcher s(segment_ending_at(1, 6), 6);  // defaults: guard 0.9, passed 1.05
   SwitchCounts c = three_view(50, 20);             // three-view rule holds...
   c.next_scale_ratio = 0.8;                        // ...but IN still looks small: far from it
   SwitchUpdate u = s.update(c, false);
   EXPECT_EQ(u.streak, 0);
   EXPECT_EQ(u.criteria_bits, 1 | kCriterionGuardBlocked);
-  c.next_scale_ratio = std::nan("");  // unknown scale: guard blocks too
-  EXPECT_EQ(s.update(c, false).streak, 0);
   c.next_scale_ratio = 0.95;
   EXPECT_EQ(s.update(c, false).event, SwitchEvent::kNone);
   EXPECT_EQ(s.update(c, false).event, SwitchEvent::kSwitched);
   EXPECT_EQ(s.segment().next, 2);
+  // Unknown scale (too few points to measure it): the guard cannot judge and does not block,
+  // the paper's rule decides (blocking stalled replay in front of plain walls).
+  c.next_scale_ratio = std::nan("");
+  u = s.update(c, false);
+  EXPECT_EQ(u.streak, 1);
+  EXPECT_EQ(u.criteria_bits, 1);
+  EXPECT_EQ(s.update(c, false).event, SwitchEvent::kSwitched);
+  EXPECT_EQ(s.segment().next, 3);
+  SwitchCounts none = three_view(10, 20);  // ...and without a paper rule, nothing happens
+  none.next_scale_ratio = std::nan("");
+  EXPECT_EQ(s.update(none, false).streak, 0);
   // No paper rule, but IN clearly passed (scale > 1.05): switch after two frames as well.
   SwitchCounts passed = three_view(10, 20);
   passed.next_scale_ratio = 1.1;
   u = s.update(passed, false);
   EXPECT_EQ(u.criteria_bits, kCriterionPassedNext);
   EXPECT_EQ(s.update(passed, false).event, SwitchEvent::kSwitched);
-  EXPECT_EQ(s.segment().next, 3);
+  EXPECT_EQ(s.segment().next, 4);
   SwitcherOptions bad;
   bad.passed_next_scale_ratio = 0.5;  // below the guard
   EXPECT_EQ(bad.validate().size(), 1u);

@@ -86,6 +86,7 @@ struct SwitcherOptions {
   /// - guard: a switch is wanted only when next_scale_ratio >= min_next_scale_ratio. Without
   ///   it, a short next segment (dense key images in a turn) makes the three-view rule fire as
   ///   soon as the robot leaves IP, and the robot turns early. 0 disables (paper's rule).
+  ///   An unknown ratio (NaN: too few points) does not block: the paper's rules decide.
   double min_next_scale_ratio = 0.9;
   /// - "passed IN": a switch is also wanted when next_scale_ratio >= passed_next_scale_ratio,
   ///   even if neither paper rule holds (with near-identical IN and INN the rules can stall).
