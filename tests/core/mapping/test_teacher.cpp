@@ -44,13 +44,17 @@ TEST(Teacher, KeyImagesDenserInTheTurn) {
   }
   const double turn_density = in_turn / double(kTurnEnd - kTurnBegin);
   const double straight_density = straight / double(n - (kTurnEnd - kTurnBegin));
-  EXPECT_GE(in_turn, 3);
+  EXPECT_GE(in_turn, 2);  // 3 before KLT started at the lines' shift (tracks survive the turn)
   EXPECT_GT(turn_density, 3.0 * straight_density)
       << in_turn << " key images in the turn, " << straight << " on straight runs";
-  // Count model check: every selection happened on a count below epsilon.
+  // Count model check: every selection happened on a count below the threshold in force,
+  // which is epsilon under the paper's rule that this tour uses.
   for (const TeachStep& s : tour.steps) {
+    if (s.frame_number > 0) {
+      EXPECT_EQ(s.threshold, tour.teach_options.selector.epsilon);
+    }
     if (s.new_key_frame) {
-      EXPECT_LT(s.count, tour.teach_options.selector.epsilon);
+      EXPECT_LT(s.count, s.threshold);
     }
   }
 }

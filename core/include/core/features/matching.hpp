@@ -59,6 +59,9 @@ struct MatcherOptions {
   geometry::EssentialRansacOptions essential;
   geometry::PlanarTrifocalOptions trifocal;
   double three_view_point_radius_px = 2.0; ///< X->H and Y->H tracks meet within this, px
+  /// Start KLT at the median shift of the line matches when it exceeds the KLT window (turns
+  /// move the image further than the pyramid reaches; matching.cpp shift_from_lines).
+  bool klt_shift_from_lines = true;
   double orb_ratio = 0.8;                  ///< wide baseline ratio test
   int orb_max_hamming = 64;                ///< wide baseline max Hamming distance (0..256)
   std::vector<std::string> validate() const;
