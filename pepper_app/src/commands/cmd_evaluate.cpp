@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands/commands.hpp"
+#include "config/app_config.hpp"
 #include "evaluation/closed_loop.hpp"
 #include "evaluation/output.hpp"
 #include "naoqi_bridge/mock/world.hpp"
@@ -43,6 +44,9 @@ struct EvaluateArgs {
   double converged_below_m = 0.05;
   double end_tolerance_m = 0.3;
   bool quiet = false;
+  std::string config_file;
+  std::vector<std::string> sets;
+  std::string trace_dir;
   std::string command_line;
 };
 
@@ -90,8 +94,17 @@ int run_evaluate(const EvaluateArgs& a) {
     std::cerr << "pepper_app evaluate: " << e.what() << "\n";
     return 2;
   }
+  try {
+    const AppConfig config = load_app_config(a.config_file, a.sets);
+    o.navigator = config.navigator_options();
+    o.key_images = config.teach_options().selector;
+  } catch (const std::exception& e) {
+    std::cerr << "pepper_app evaluate: " << e.what() << "\n";
+    return 2;
+  }
   o.starts = a.starts;
   o.seed = a.seed;
+  o.trace_dir = a.trace_dir;
   o.perturb_lateral_m = a.lateral_m;
   o.perturb_yaw_deg = a.yaw_deg;
   o.perturb_along_m = a.along_m;
@@ -161,6 +174,14 @@ void register_evaluate_command(CLI::App& app) {
       "smoothness and per-frame time (docs/evaluation.md). Exit code 1 when a run fails.");
   auto args = std::make_shared<EvaluateArgs>();
   cmd->add_option("--world", args->worlds, "World YAML file(s) (worlds/*.yaml)")->required();
+  cmd->add_option("--config", args->config_file,
+                  "Configuration file (YAML/JSON): key-image selection, perception and navigator "
+                  "parameters (`pepper_app config dump` shows them all)");
+  cmd->add_option("--set", args->sets,
+                  "Override one parameter, e.g. --set key_images.relative=0.5 (repeatable)");
+  cmd->add_option("--trace", args->trace_dir,
+                  "Write one JSON-lines trace per run here (ground truth, command, telemetry per "
+                  "frame) to diagnose a failed run");
   cmd->add_option("--starts", args->starts, "Replay runs per configuration")->capture_default_str();
   cmd->add_option("--features", args->features, "lines, points or both")->capture_default_str();
   cmd->add_option("--controller", args->controller, "ibvs or vnhv")->capture_default_str();

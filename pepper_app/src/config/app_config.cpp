@@ -95,6 +95,7 @@ template <class V> void visit(V& v, cf::MatcherOptions& o) {
   v.group("essential", [&](V& s) { visit(s, o.essential); });
   v.group("trifocal", [&](V& s) { visit(s, o.trifocal); });
   v("three_view_point_radius_px", o.three_view_point_radius_px);
+  v("klt_shift_from_lines", o.klt_shift_from_lines);
   v("orb_ratio", o.orb_ratio);
   v("orb_max_hamming", o.orb_max_hamming);
 }

@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -13,6 +15,7 @@
 
 #include "core/mapping/teacher.hpp"
 #include "evaluation/metrics.hpp"
+#include "session/telemetry_json.hpp"
 #include "naoqi_bridge/mock/mock_bridge.hpp"
 #include "naoqi_bridge/mock/mock_robot.hpp"
 #include "naoqi_bridge/mock/teach_driver.hpp"
@@ -88,6 +91,7 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
       bridge.start_camera({0, options.width_px, options.height_px, 15});
   mock::TeachDriver driver(world->scenario);
   core::mapping::TeachOptions to;
+  to.selector = options.key_images;
   to.extractor = options.navigator.extractor;
   to.matcher = options.navigator.matcher;
   core::mapping::Teacher teacher(camera, to);
@@ -120,6 +124,9 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
   params << R"({"evaluation":{"world":")" << world->name << R"(","width_px":)" << options.width_px
          << R"(,"height_px":)" << options.height_px << "}}";
   core::memory::VisualMemory map = teacher.finish(params.str());
+  // Frame 0 and the final frame are key images too (the selector reports the ones between).
+  out.key_frames.insert(out.key_frames.begin(), 0);
+  if (map.key_images.size() == out.key_frames.size() + 1) out.key_frames.push_back(out.frames - 1);
   out.map_dir = options.map_dir.empty()
                     ? std::filesystem::temp_directory_path() /
                           ("pepper_eval_map_" + world->name + "_" +
@@ -205,6 +212,21 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
   double t_s = 0.0;
   int stop_frames_after_complete = 0;
   std::vector<double> step_ms;
+  std::ofstream trace;
+  if (!options.trace_dir.empty()) {
+    std::filesystem::create_directories(options.trace_dir);
+    const auto file = options.trace_dir / (teach.world_name + "_" + std::string(feature_label(options.features)) +
+                                           "_run" + std::to_string(k + 1) + ".jsonl");
+    trace.open(file);
+    if (!trace) throw std::runtime_error(file.string() + ": cannot open for writing");
+    // First line: where each key image was taught (its ground-truth base position).
+    nlohmann::json keys = nlohmann::json::array();
+    for (const int64_t f : teach.key_frames) {
+      const auto& p = teach.path_m.at(static_cast<std::size_t>(f));
+      keys.push_back({{"frame", f}, {"x_m", p.x()}, {"y_m", p.y()}});
+    }
+    trace << nlohmann::json{{"taught_key_images", keys}}.dump() << '\n';
+  }
   for (;; t_s += dt) {
     auto frame = bridge.next_frame(std::chrono::milliseconds(100));
     RunSample smp;
@@ -212,9 +234,11 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
     smp.frame_received = frame.has_value();
     smp.step_ms = kNaN;
     bool stopped = false;
+    std::optional<nav::StepResult> step;
     if (frame) {
       const auto s0 = Clock::now();
-      const nav::StepResult res = navigator.step(*frame);
+      step = navigator.step(*frame);
+      const nav::StepResult& res = *step;
       smp.step_ms = 1e3 * seconds_since(s0);
       step_ms.push_back(smp.step_ms);
       const nav::Command& c = res.command;
@@ -250,6 +274,16 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
     smp.s_m = pr.s_m;
     smp.lateral_m = pr.lateral_m;
     r.samples.push_back(smp);
+    if (trace) {
+      nlohmann::json line = {{"t_s", t_s},
+                             {"gt", {{"x_m", pos.x()}, {"y_m", pos.y()}, {"yaw_rad", gt.base.yaw_rad},
+                                     {"s_m", pr.s_m}, {"lateral_m", pr.lateral_m}}}};
+      if (step) {
+        line["command"] = command_to_json(step->command);
+        line["telemetry"] = telemetry_to_json(step->telemetry);
+      }
+      trace << line.dump() << '\n';
+    }
 
     if (robot.collided()) {
       r.outcome = "collision";

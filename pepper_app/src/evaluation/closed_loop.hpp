@@ -32,6 +32,7 @@
 
 #include "core/control/ibvs_law.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "core/mapping/key_image_selector.hpp"
 #include "core/navigator/navigator.hpp"
 #include "evaluation/disturbance.hpp"
 #include "naoqi_bridge/mock/world.hpp"
@@ -65,6 +66,10 @@ struct EvaluationOptions {
   double time_limit_factor = 1.5;
   std::filesystem::path map_dir;    ///< where the taught map is saved (empty: a temp folder)
   core::navigator::NavigatorOptions navigator;  ///< features/controller fields are overridden
+  core::mapping::KeyImageSelectorOptions key_images;  ///< teach: key-image selection rule
+  /// When set, each run writes <trace_dir>/<world>_<features>_run<k>.jsonl: per frame the ground
+  /// truth, the command and the navigator's telemetry (for diagnosing a failed run).
+  std::filesystem::path trace_dir;
 
   std::vector<std::string> validate() const;
 };
@@ -75,7 +80,7 @@ struct TeachResult {
   core::memory::VisualMemory map;            ///< as loaded back from map_dir
   std::filesystem::path map_dir;
   std::vector<Eigen::Vector2d> path_m;       ///< ground-truth base positions, one per frame
-  std::vector<int64_t> key_frames;           ///< teach frame numbers of the key images
+  std::vector<int64_t> key_frames;           ///< teach frame numbers of all key images
   double length_m = 0.0;                     ///< length of path_m
   int frames = 0;
   double wall_s = 0.0;                       ///< wall-clock time of the teach

@@ -52,11 +52,8 @@ TEST_F(OfflineJobsData, MapBuildThenReplayLogOfTheSameFramesReachesTheEnd) {
   const Recording rec = read_recording(tmp_->path() / "rec", std::nullopt);
   ASSERT_EQ(rec.frames.size(), 150u);
   std::size_t last_progress = 0;
-  // epsilon pinned to 60: with the default (100) an absolute threshold makes key images so dense
-  // on this continuous drive (41 in 150 frames) that replay cannot switch through them; that
-  // known core problem is measured in docs/method/teach.md. This test is about the offline jobs.
+  // Default teach options (relative threshold): the same frames replayed must reach the end.
   core::mapping::TeachOptions teach;
-  teach.selector.epsilon = 60;
   const auto map = build_map_from_recording(rec, teach, false, "{}",
                                             [&](std::size_t done, std::size_t) { last_progress = done; });
   EXPECT_EQ(last_progress, 150u);

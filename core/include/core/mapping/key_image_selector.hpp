@@ -27,11 +27,10 @@ namespace pepper::core::mapping {
 
 struct KeyImageSelectorOptions {
   /// epsilon of METHOD.md: verified lines (three views) + points (two views) below which a new
-  /// key image is taken. >= 1. Default 100 from real Pepper images (docs/method/teach.md):
-  /// neighbouring key images of a working QVGA map share 90..146 verified matches (medians).
-  /// Known problem (docs/method/teach.md): on continuous teach drives an absolute threshold gives
-  /// key images too dense to switch through (rendered QVGA: 41 in 2 m with 100).
-  int epsilon = 100;
+  /// key image is taken. >= 1. With `relative` on (default) it is the floor of the threshold:
+  /// the absolute rule alone does not transfer between image sizes and textures (100 gave 16 key
+  /// images per metre on rendered QVGA tours whose counts never exceed ~140: docs/method/teach.md).
+  int epsilon = 30;
   /// Minimum frame gap between a key image and the next (not in the paper; >= 1, 1 = paper).
   /// Replay needs `consecutive_frames` (2) frames per switch, so key images closer than about
   /// three frames cannot be switched through in time and the robot lags in turns
@@ -40,8 +39,9 @@ struct KeyImageSelectorOptions {
   /// Relative threshold (not in the paper; 0 = off, the paper's absolute rule). When > 0 the
   /// threshold for key image k is max(epsilon, relative * reference_k), where reference_k is the
   /// count at frame k + 2 (the first frame that has three distinct views Ik, Ic-1, Ic). The
-  /// threshold then follows the image size and the texture of each place.
-  double relative = 0.0;
+  /// threshold then follows the image size and the texture of each place. Default 0.5
+  /// (measured in closed loop: docs/method/teach.md).
+  double relative = 0.5;
   std::vector<std::string> validate() const;
 };
 
