@@ -18,6 +18,11 @@
   const ui = {
     framesReceived: 0,
     framesDrawn: 0,
+    // Feature overlay of the image on screen: segments and points drawn (0 when hidden by the
+    // "features" checkbox), and how many frames so far had any drawn.
+    overlayLinesDrawn: 0,
+    overlayPointsDrawn: 0,
+    framesWithOverlay: 0,
     lastSeq: 0,
     wsOpen: false,
     sent: [],        // last intents sent (type only), newest last
@@ -110,6 +115,8 @@
   // ------------------------------------------------------------------ camera
   const cam = $('camera');
   const camCtx = cam.getContext('2d');
+  const showFeatures = $('show-features');
+  let shown = null;  // { bmp, header } on screen, kept to redraw when the checkbox changes
   let decoding = false;
   let pendingFrame = null;
   const frameTimes = [];
@@ -127,8 +134,9 @@
     decoding = true;
     try {
       const bmp = await createImageBitmap(new Blob([f.bytes], { type: mimeOf(f.bytes) }));
+      if (shown) shown.bmp.close();
+      shown = { bmp, header: f.header };
       drawFrame(bmp, f.header);
-      bmp.close();
     } catch (e) {
       logLine('could not decode a frame');
     }
@@ -136,7 +144,7 @@
     if (pendingFrame) decodeNext();
   }
 
-  function drawFrame(bmp, header) {
+  function render(bmp, header) {
     if (cam.width !== bmp.width || cam.height !== bmp.height) {
       cam.width = bmp.width;
       cam.height = bmp.height;
@@ -146,6 +154,13 @@
     const sx = ov.width_px ? bmp.width / ov.width_px : 1;
     const sy = ov.height_px ? bmp.height / ov.height_px : 1;
     drawOverlay(ov, sx, sy);
+  }
+
+  showFeatures.addEventListener('change', () => { if (shown) render(shown.bmp, shown.header); });
+
+  function drawFrame(bmp, header) {
+    render(bmp, header);
+    if (ui.overlayLinesDrawn + ui.overlayPointsDrawn > 0) ui.framesWithOverlay += 1;
     $('no-signal').hidden = true;
     ui.framesDrawn += 1;
     ui.lastSeq = header.seq || 0;
@@ -165,30 +180,43 @@
     }
   }
 
+  // Lines and points are drawn only with the "features" checkbox ticked; the legend always
+  // gives their counts.
   function drawOverlay(ov, sx, sy) {
     const lw = Math.max(1, cam.width / 320);
     const legend = [];
+    const features = showFeatures.checked;
+    ui.overlayLinesDrawn = 0;
+    ui.overlayPointsDrawn = 0;
     for (const group of ov.lines || []) {
-      camCtx.strokeStyle = group.color || '#22c55e';
-      camCtx.lineWidth = (group.width_px || 2) * lw / 2;
-      camCtx.beginPath();
-      for (const s of group.segments || []) {
-        camCtx.moveTo(s[0] * sx, s[1] * sy);
-        camCtx.lineTo(s[2] * sx, s[3] * sy);
+      const segments = group.segments || [];
+      if (features) {
+        camCtx.strokeStyle = group.color || '#22c55e';
+        camCtx.lineWidth = (group.width_px || 2) * lw / 2;
+        camCtx.beginPath();
+        for (const s of segments) {
+          camCtx.moveTo(s[0] * sx, s[1] * sy);
+          camCtx.lineTo(s[2] * sx, s[3] * sy);
+        }
+        camCtx.stroke();
+        ui.overlayLinesDrawn += segments.length;
       }
-      camCtx.stroke();
-      if (group.label) legend.push([group.color || '#22c55e', group.label, (group.segments || []).length]);
+      if (group.label) legend.push([group.color || '#22c55e', group.label, segments.length]);
     }
     for (const group of ov.points || []) {
-      camCtx.fillStyle = group.color || '#ef4444';
-      const r = (group.radius_px || 3) * lw / 2;
-      camCtx.beginPath();
-      for (const p of group.uv || []) {
-        camCtx.moveTo(p[0] * sx + r, p[1] * sy);
-        camCtx.arc(p[0] * sx, p[1] * sy, r, 0, 2 * Math.PI);
+      const uv = group.uv || [];
+      if (features) {
+        camCtx.fillStyle = group.color || '#ef4444';
+        const r = (group.radius_px || 3) * lw / 2;
+        camCtx.beginPath();
+        for (const p of uv) {
+          camCtx.moveTo(p[0] * sx + r, p[1] * sy);
+          camCtx.arc(p[0] * sx, p[1] * sy, r, 0, 2 * Math.PI);
+        }
+        camCtx.fill();
+        ui.overlayPointsDrawn += uv.length;
       }
-      camCtx.fill();
-      if (group.label) legend.push([group.color || '#ef4444', group.label, (group.uv || []).length]);
+      if (group.label) legend.push([group.color || '#ef4444', group.label, uv.length]);
     }
     if (Array.isArray(ov.text) && ov.text.length) {
       camCtx.font = `${Math.round(12 * lw)}px sans-serif`;
@@ -311,7 +339,7 @@
       el.hidden = !s.stop_reason;
       el.textContent = s.stop_reason ? `Stopped: ${s.stop_reason}` : '';
     }
-    if ('trajectory' in patch) drawTopView();
+    if ('trajectory' in patch || 'taught_path' in patch) drawTopView();
     if ('teach' in patch || 'replay' in patch) renderStrip();
   }
 
@@ -477,7 +505,9 @@
     const W = canvas.width; const H = canvas.height;
     ctx.clearRect(0, 0, W, H);
     const tr = ui.state.trajectory || {};
-    const taught = tr.taught || []; const replayed = tr.replayed || []; const keys = tr.keys || [];
+    const tp = ui.state.taught_path || {};  // constant part, sent once by the app
+    const taught = tr.taught || tp.taught || []; const replayed = tr.replayed || [];
+    const keys = tr.keys || tp.keys || [];
     const all = [...taught, ...replayed, ...keys];
     if (!all.length) {
       ctx.fillStyle = '#6b7280'; ctx.font = '13px sans-serif';
@@ -510,10 +540,11 @@
       pts.forEach(([x, y], i) => (i ? ctx.lineTo(tx(x), ty(y)) : ctx.moveTo(tx(x), ty(y))));
       ctx.stroke(); ctx.setLineDash([]);
     };
-    path(taught, '#2563eb', 3, []);
-    path(replayed, '#f97316', 2, [6, 4]);
+    // Key images under the paths: dense key images (every few cm) must not hide the paths.
     ctx.fillStyle = '#111827';
     for (const [x, y] of keys) { ctx.beginPath(); ctx.arc(tx(x), ty(y), 3.5, 0, 2 * Math.PI); ctx.fill(); }
+    path(taught, '#2563eb', 3, []);
+    path(replayed, '#f97316', 2, [6, 4]);
     ctx.fillStyle = '#6b7280'; ctx.font = '11px sans-serif';
     ctx.fillText(`grid ${step} m`, 8, H - 8);
     const o = ui.state.offline || {};
@@ -623,6 +654,9 @@
     updateDrive('key');
   }, true);
   window.addEventListener('keyup', (ev) => {
+    // Space is the emergency stop only: a focused button or checkbox must not also act on it
+    // (they activate on keyup).
+    if (ev.code === 'Space' && !isTextField(ev.target)) { ev.preventDefault(); return; }
     const dir = KEYMAP[ev.code];
     if (!dir) return;
     ev.preventDefault();

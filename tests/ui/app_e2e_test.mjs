@@ -1,26 +1,35 @@
 // End-to-end browser test of the real app (issue 6): `pepper_app teach` and `pepper_app replay`
 // on the in-process mock robot with the teach UI, driven by Debian's chromium through
 // playwright-core (tests/ui/lib.mjs). Checks: the page loads and connects, the live image
-// advances, holding the Up arrow makes the mock robot move (the app logs every base command as a
-// JSON line on stdout: {"event":"command","v_m_s":...,"stop":false}) and releasing it stops it,
-// the Finish button ends the teach with a saved map, and STOP stops a running replay.
+// advances with the detected (teach) or matched (replay) lines and points drawn over it, holding
+// the Up arrow makes the mock robot move (the app logs every base command as a JSON line on
+// stdout: {"event":"command","v_m_s":...,"stop":false}) and releasing it stops it, the Finish
+// button ends the teach with a saved map, the replay's top view draws the taught path (from the
+// map's taught_path.json) and the replayed one, and STOP stops a running replay.
+// It also measures the frame rate of the live image in the browser over --fps-seconds (default
+// 10) of the teach session and --replay-fps-seconds (default 5) of the replay, and reports them;
+// it asserts only >= --min-fps (default 5), a floor a loaded CI machine still reaches.
 // Screenshots go to --artifacts (git-ignored).
 //
 //   node tests/ui/app_e2e_test.mjs --app build-app/pepper_app/pepper_app \
 //        --world worlds/robotics_room.yaml [--artifacts tests/ui/artifacts] [--echo]
+//        [--fps-seconds 10] [--replay-fps-seconds 5] [--min-fps 5]
 import { spawnSync } from 'node:child_process';
 import { mkdtempSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import {
   HERE, parseArgs, startServer, launchBrowser, ensureDir, makeRunner, expectConnected,
-  expectFramesAdvance, holdKey, sleep,
+  expectFramesAdvance, expectOverlayDrawn, measureFrameRate, holdKey, sleep,
 } from './lib.mjs';
 
 const opts = parseArgs(process.argv.slice(2), {
   app: join(HERE, '..', '..', 'build', 'pepper_app', 'pepper_app'),
   world: join(HERE, '..', '..', 'worlds', 'robotics_room.yaml'),
   artifacts: join(HERE, 'artifacts'),
+  'fps-seconds': '10',
+  'replay-fps-seconds': '5',
+  'min-fps': '5',
 });
 const echo = opts.echo === true;
 const QVGA = ['--set', 'robot.camera_width_px=320', '--set', 'robot.camera_height_px=240'];
@@ -29,6 +38,16 @@ const work = mkdtempSync(join(tmpdir(), 'pepper-app-e2e-'));
 const run = makeRunner();
 
 const isCommand = (pred) => (e) => e.event === 'command' && pred(e);
+
+/// Measures the page's display rate over `seconds`, prints it, fails below --min-fps.
+async function checkFrameRate(page, seconds, what) {
+  const r = await measureFrameRate(page, seconds);
+  const note = `${r.drawn_fps.toFixed(1)} frames/s drawn, ${r.received_fps.toFixed(1)} received `
+    + `over ${r.seconds.toFixed(1)} s (${what}, mock robot)`;
+  console.log(`measured: ${note}`);
+  if (!(r.drawn_fps >= Number(opts['min-fps']))) throw new Error(`${note}; expected >= ${opts['min-fps']}`);
+  return note;
+}
 
 async function teachStep() {
   const server = await startServer(opts.app, ['teach', '--robot', `mock:${opts.world}`,
@@ -44,6 +63,10 @@ async function teachStep() {
       const fps = await expectFramesAdvance(page, 8);
       return `${fps.toFixed(1)} frames/s drawn`;
     });
+    await run.step('detected lines and points are drawn over the live image', async () => (
+      expectOverlayDrawn(page, { need: 'both' })));
+    await run.step('frame rate of the live image in the browser (teach)', async () => (
+      checkFrameRate(page, Number(opts['fps-seconds']), 'teach')));
     await run.step('holding Up moves the mock robot, releasing it stops it', async () => {
       let from = server.events.length;
       const r = await holdKey(page, 'ArrowUp', 800,
@@ -82,11 +105,13 @@ async function teachStep() {
 }
 
 async function replayStep() {
-  // A short scripted tour to replay (no browser needed for it).
+  // A scripted tour to replay (no browser needed for it), long enough to be still driving at the
+  // end of the frame-rate measurement.
   const mapDir = join(work, 'tour');
   const t = spawnSync(opts.app, ['teach', '--robot', `mock:${opts.world}`, '--map', mapDir,
-    '--max-distance', '2.0', ...QVGA], { encoding: 'utf8' });
+    '--max-distance', '4.0', ...QVGA], { encoding: 'utf8' });
   if (t.status !== 0) throw new Error(`scripted teach failed:\n${t.stderr}`);
+  if (!existsSync(join(mapDir, 'taught_path.json'))) throw new Error('teach on the mock wrote no taught_path.json');
   const server = await startServer(opts.app, ['replay', '--robot', `mock:${opts.world}`,
     '--map', mapDir, '--ui-port', '0', '--mock-start', '0', '--seed', '0', ...QVGA], { echo });
   const browser = await launchBrowser();
@@ -98,6 +123,35 @@ async function replayStep() {
       await server.waitForEvent(isCommand((e) => !e.stop && e.v_m_s > 0),
         { timeoutMs: 30000, what: 'the navigator driving' });
       await expectFramesAdvance(page, 5);
+    });
+    await run.step('matched lines and points are drawn over the live image', async () => (
+      expectOverlayDrawn(page, { need: 'any' })));
+    await run.step('frame rate of the live image in the browser (replay)', async () => {
+      const note = await checkFrameRate(page, Number(opts['replay-fps-seconds']), 'replay');
+      const done = server.events.find((e) => e.event === 'replay_done');
+      if (done) throw new Error(`the replay ended (${done.outcome}) during the measurement: ${note}`);
+      return note;
+    });
+    await run.step('top view shows the taught and the replayed paths', async () => {
+      await page.waitForFunction(() => {
+        const s = window.teachUi.state;
+        return s.taught_path && s.taught_path.taught.length >= 10
+          && s.trajectory && s.trajectory.replayed.length >= 30;  // 2 s of replay
+      }, null, { timeout: 15000, polling: 100 });
+      // Pixels of the taught (blue #2563eb) and replayed (orange #f97316) polylines.
+      const px = await page.evaluate(() => {
+        const c = document.getElementById('topview');
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let blue = 0; let orange = 0;
+        for (let i = 0; i < d.length; i += 4) {
+          if (d[i + 2] > 180 && d[i] < 90) blue += 1;
+          if (d[i] > 200 && d[i + 1] > 80 && d[i + 1] < 160 && d[i + 2] < 60) orange += 1;
+        }
+        const s = window.teachUi.state;
+        return { blue, orange, taught: s.taught_path.taught.length, keys: s.taught_path.keys.length };
+      });
+      if (px.blue === 0 || px.orange === 0) throw new Error(`top view pixels ${JSON.stringify(px)}`);
+      return `taught ${px.taught} poses, ${px.keys} key images; ${px.blue} blue / ${px.orange} orange px`;
     });
     await run.step('screenshot of the replay page', async () => {
       const file = join(artifacts, 'app_replay.png');

@@ -210,3 +210,56 @@ export async function holdKey(page, key, holdMs, onHeld, onReleased) {
   const released = await onReleased();
   return { held, released };
 }
+
+/// Pixels of the live image (#camera canvas) that are clearly coloured: the camera image is grey,
+/// so these are the drawn feature overlay (green lines, red points).
+export async function overlayPixels(page) {
+  return page.evaluate(() => {
+    const c = document.getElementById('camera');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      const hi = Math.max(d[i], d[i + 1], d[i + 2]);
+      const lo = Math.min(d[i], d[i + 1], d[i + 2]);
+      if (hi - lo > 60) n += 1;
+    }
+    return n;
+  });
+}
+
+/// Waits for a frame with feature overlay drawn (`need`: 'lines', 'points', 'both' or 'any'),
+/// checks the canvas really has coloured pixels, then that unticking the "features" checkbox
+/// removes them and ticking it brings them back. Returns a note with the counts.
+export async function expectOverlayDrawn(page, { need = 'any', timeoutMs = 15000 } = {}) {
+  await page.waitForFunction((what) => {
+    const u = window.teachUi;
+    const l = u.overlayLinesDrawn > 0; const p = u.overlayPointsDrawn > 0;
+    return what === 'both' ? l && p : what === 'lines' ? l : what === 'points' ? p : l || p;
+  }, need, { timeout: timeoutMs, polling: 50 });
+  const counts = await page.evaluate(() => [window.teachUi.overlayLinesDrawn, window.teachUi.overlayPointsDrawn]);
+  const on = await overlayPixels(page);
+  if (on === 0) throw new Error(`page reports ${counts[0]} lines / ${counts[1]} points drawn but the canvas has no coloured pixel`);
+  await page.uncheck('#show-features');
+  const off = await overlayPixels(page);
+  const offCounts = await page.evaluate(() => [window.teachUi.overlayLinesDrawn, window.teachUi.overlayPointsDrawn]);
+  await page.check('#show-features');
+  if (off !== 0 || offCounts[0] + offCounts[1] !== 0) {
+    throw new Error(`with "features" unticked the canvas still has ${off} coloured pixels (${offCounts} drawn)`);
+  }
+  await page.waitForFunction(() => window.teachUi.overlayLinesDrawn + window.teachUi.overlayPointsDrawn > 0,
+    null, { timeout: timeoutMs, polling: 50 });
+  return `${counts[0]} lines, ${counts[1]} points drawn (${on} coloured pixels); none when unticked`;
+}
+
+/// Display rate of the live image over `seconds`: frames drawn and frames received per second,
+/// from the page's own counters (window.teachUi), wall time measured in the page.
+export async function measureFrameRate(page, seconds) {
+  const read = () => page.evaluate(() => ({
+    drawn: window.teachUi.framesDrawn, received: window.teachUi.framesReceived, t_ms: performance.now(),
+  }));
+  const a = await read();
+  await sleep(seconds * 1000);
+  const b = await read();
+  const dt_s = (b.t_ms - a.t_ms) / 1000;
+  return { drawn_fps: (b.drawn - a.drawn) / dt_s, received_fps: (b.received - a.received) / dt_s, seconds: dt_s };
+}

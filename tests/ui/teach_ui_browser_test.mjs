@@ -6,7 +6,8 @@
 //        --server-args "--web-root teach_ui/web --exit-on-stdin-eof" [--artifacts DIR]
 //        [--chromium /usr/bin/chromium] [--replay-scenario-args "--scenario replay"] [--echo]
 //
-// Checks: the page loads and connects; the live image updates (frame counter advances); holding
+// Checks: the page loads and connects; the live image updates (frame counter advances) with the
+// feature overlay drawn over it (coloured pixels; none with "features" unticked); holding
 // the Up arrow sends a drive intent and releasing it a drive_released; clicking STOP sends an
 // estop; the space bar sends an estop; with a finished tour (--scenario replay) the key-image
 // strip, progress and plots show. Screenshots go to --artifacts (git-ignored). Prints
@@ -14,7 +15,7 @@
 import { join } from 'node:path';
 import {
   HERE, parseArgs, splitArgs, requireBrowserToolchain, startServer, launchBrowser, ensureDir,
-  makeRunner, expectConnected, expectFramesAdvance, holdKey,
+  makeRunner, expectConnected, expectFramesAdvance, expectOverlayDrawn, holdKey,
 } from './lib.mjs';
 
 const opts = parseArgs(process.argv.slice(2), {
@@ -62,6 +63,9 @@ async function main() {
       const fps = await expectFramesAdvance(page, 20);
       return `${fps.toFixed(1)} frames/s displayed`;
     });
+
+    await run.step('feature overlay is drawn over the live image and can be hidden', async () => (
+      expectOverlayDrawn(page, { need: 'both' })));
 
     await run.step('holding Up sends a drive intent, releasing it sends a stop', async () => {
       const from = server.events.length;

@@ -85,6 +85,11 @@ TeachStep Teacher::add_frame(const Frame& frame) {
   return step;
 }
 
+const features::ImageFeatures& Teacher::last_frame_features() const {
+  if (!prev_) throw std::logic_error("Teacher::last_frame_features: no frame (yet, or finished)");
+  return prev_->features;
+}
+
 memory::VisualMemory Teacher::finish(const std::string& parameters_json) {
   if (finished_) throw std::invalid_argument("Teacher::finish called twice");
   if (frames_ < 2) {

@@ -414,6 +414,10 @@ StepResult Navigator::step(const Frame& frame) {
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
   if (!omega) omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
   tel.timings.match_ms = ms_since(t0);
+  {  // display only; the control law above already computed (and cached) these matches
+    const int in = switcher_->segment().next;
+    tel.overlay = features::matched_overlay(fm.two_view(in, key(in)), fm.current(), in);
+  }
   t0 = Clock::now();
   Command cmd;
   if (omega) {

@@ -104,6 +104,7 @@ int run_demo(const DemoArgs& a) {
     ro.telemetry_jsonl = out / "replay.jsonl";
     ro.config_json = to.config_json;
     ro.taught_path_m = taught.path_m;
+    ro.taught_keys_m = taught.key_m;
     // Safety cap: three times the taught frames.
     ro.max_frames = 3 * taught.frames_recorded + 300;
     ro.give_up_lost_s = 10.0;

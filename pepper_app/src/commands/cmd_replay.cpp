@@ -11,6 +11,7 @@
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
+#include "session/taught_path.hpp"
 #include "teach_ui/ui_server.hpp"
 
 namespace pepper::app {
@@ -49,6 +50,20 @@ int run_replay(const ReplayArgs& a) {
       const auto& sc = robot.mock->world().scenario;
       robot.mock->place(sc.replay_start(static_cast<size_t>(a.mock_start), a.seed));
       robot.mock->set_lighting("replay");
+    }
+    if (robot.mock) {  // the top view shows the taught path when the map was taught on this world
+      try {
+        const auto taught = load_taught_path(a.map);
+        if (taught && taught->world == robot.mock->world().name) {
+          o.taught_path_m = taught->path_m;
+          o.taught_keys_m = taught->key_images_m;
+        } else if (taught) {
+          std::cerr << "pepper_app replay: note: the map was taught in mock world '"
+                    << taught->world << "', not this one: no taught path in the top view\n";
+        }
+      } catch (const std::exception& e) {  // display only: never a reason not to replay
+        std::cerr << "pepper_app replay: warning: " << e.what() << "\n";
+      }
     }
     {
       const auto problems = o.validate();

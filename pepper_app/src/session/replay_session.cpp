@@ -136,8 +136,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     int last_in = -2;
     int64_t last_moving_t_ns = -1;
     nlohmann::json replayed = nlohmann::json::array();
-    nlohmann::json taught = nlohmann::json::array();
-    for (const auto& p : options.taught_path_m) taught.push_back({p.x(), p.y()});
+    if (!options.taught_path_m.empty()) {  // constant: sent once, not with every "trajectory"
+      nlohmann::json taught = nlohmann::json::array(), taught_keys = nlohmann::json::array();
+      for (const auto& p : options.taught_path_m) taught.push_back({p.x(), p.y()});
+      for (const auto& p : options.taught_keys_m) taught_keys.push_back({p.x(), p.y()});
+      link.publish_state({{"taught_path", {{"taught", taught}, {"keys", taught_keys}}}});
+    }
     auto next_iter = Clock::now();
     link.event({{"event", "replay_started"}, {"key_images", result.key_image_count}});
 
@@ -212,7 +216,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         line["ground_truth"] = {{"x_m", s.x_m}, {"y_m", s.y_m}, {"yaw_rad", s.yaw_rad}};
         replayed.push_back({s.x_m, s.y_m});
         if (link.has_ui() && result.frames % 5 == 0) {
-          link.publish_state({{"trajectory", {{"taught", taught}, {"replayed", replayed}}},
+          link.publish_state({{"trajectory", {{"replayed", replayed}}},
                               {"pose", line["ground_truth"]}});
         }
         if (robot.mock->collided()) {
@@ -226,11 +230,15 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (telemetry.is_open()) telemetry << line.dump() << "\n";
 
       if (link.has_ui()) {
-        link.publish_frame(*frame, {{"text",
-                                     {std::string(nav::to_string(t.state)) + "  IP " +
-                                      std::to_string(t.ip) + "  IN " + std::to_string(t.in) +
-                                      "  lines " + std::to_string(t.n_lines_next) + "  points " +
-                                      std::to_string(t.n_points_next)}}});
+        nlohmann::json overlay = overlay_to_json(
+            t.overlay, t.overlay.key_index < 0
+                           ? std::string("matched")
+                           : "IN " + std::to_string(t.overlay.key_index) + " matched");
+        overlay["text"] = nlohmann::json::array(
+            {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
+             std::to_string(t.in) + "  lines " + std::to_string(t.n_lines_next) + "  points " +
+             std::to_string(t.n_points_next)});
+        link.publish_frame(*frame, overlay);
         link.publish_samples({{"t_s", s.t_s},
                               {"v_m_s", s.v_m_s},
                               {"omega_rad_s", s.omega_rad_s},

@@ -9,7 +9,8 @@
 // an exception from the core or the bridge ("error"), Ctrl-C ("interrupted"), the UI's STOP
 // ("ui_stop"), a lost connection ("connection_lost"), the frame cap ("max_frames"). Every way out
 // sends bridge.stop() first.
-// On the mock robot the ground-truth base positions are collected (top view, evaluation).
+// On the mock robot the ground-truth base positions are collected (top view, evaluation). The UI's
+// live image carries the navigator's matches with IN (Telemetry::overlay).
 // Threads: none of its own. Errors end in ReplayResult (never thrown) after the stop.
 
 #include <cstdint>
@@ -42,7 +43,10 @@ struct ReplaySessionOptions {
   /// once it had been driving; 0 = keep trying to relocalise until stopped by the operator.
   double give_up_lost_s = 0.0;
   std::string config_json = "{}";
-  std::vector<Eigen::Vector2d> taught_path_m;  ///< mock only: shown in the UI's top view
+  /// Mock only, shown in the UI's top view: the taught ground-truth path and key-image positions
+  /// (world frame), sent once as the state key "taught_path".
+  std::vector<Eigen::Vector2d> taught_path_m;
+  std::vector<Eigen::Vector2d> taught_keys_m;
   std::vector<std::string> validate() const;
 };
 

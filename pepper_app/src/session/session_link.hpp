@@ -3,8 +3,9 @@
 // and the observers (teach UI, JSON-lines event log on stdout).
 //
 // SessionLink is passive plumbing: the loop polls poll_intent() once per iteration (never blocks)
-// and calls the publish helpers; with no UI they do nothing. Frames go to the UI as JPEG at most
-// every `min_frame_period` (about 15 fps). Events are one JSON object per line, flushed, e.g.
+// and calls the publish helpers; with no UI they do nothing. Frames go to the UI as JPEG, at most
+// one per `min_frame_period` on average (about 15 fps). Events are one JSON object per line,
+// flushed, e.g.
 //   {"event":"command","v_m_s":0.1,"omega_rad_s":0.0,"stop":false}
 // (written only when the command changes, so tests and scripts can follow the robot).
 // Thread-safety: use from the session thread only (the UiServer itself is thread-safe).
@@ -61,7 +62,7 @@ class SessionLink {
   teach_ui::UiServer* ui_;
   std::ostream* events_;
   std::function<std::optional<teach_ui::Intent>()> intent_source_;
-  std::chrono::steady_clock::time_point last_frame_{};
+  std::chrono::steady_clock::time_point next_frame_due_{};
   bool have_last_command_ = false;
   double last_v_ = 0.0, last_omega_ = 0.0;
   bool last_stop_ = true;

@@ -11,6 +11,8 @@
 #include "naoqi_bridge/mock/teach_driver.hpp"
 #include "session/recording.hpp"
 #include "session/signals.hpp"
+#include "session/taught_path.hpp"
+#include "session/telemetry_json.hpp"
 
 namespace pepper::app {
 
@@ -184,14 +186,17 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
         const core::mapping::TeachStep step = teacher->add_frame(*frame);
         if (pos) result.path_m.push_back(*pos);
-        if (step.new_key_frame) {
+        // The first frame is always key image 0 (the teacher does not report it as a new one).
+        if (step.new_key_frame || step.frame_number == 0) {
           const int k = step.key_image_count - 1;
-          if (pos) result.key_m.push_back(*pos);
-          key_list.push_back({{"index", k},
-                              {"n_lines", step.n_lines_three_view},
-                              {"n_points", step.n_points_two_view},
-                              {"distance_m", result.distance_m},
-                              {"weak", false}});
+          // The selector may pick the previous frame: take the position of the frame it chose.
+          if (pos) result.key_m.push_back(result.path_m.at(step.new_key_frame.value_or(0)));
+          nlohmann::json key = {{"index", k}, {"distance_m", result.distance_m}, {"weak", false}};
+          if (step.frame_number > 0) {  // the first frame has no counts (nothing to match)
+            key["n_lines"] = step.n_lines_three_view;
+            key["n_points"] = step.n_points_two_view;
+          }
+          key_list.push_back(std::move(key));
           link.publish_thumbnail("key/" + std::to_string(k), frame->gray);
           link.publish_state({{"teach", teach_state(result, key_list)}});
         }
@@ -202,9 +207,14 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                               {"n_lines", step.n_lines_three_view},
                               {"n_points", step.n_points_two_view}});
       }
-      nlohmann::json overlay = {{"text", {std::string(recording ? "REC " : "") + "frame " +
-                                          std::to_string(frame->index) + ", key images " +
-                                          std::to_string(teacher->key_image_count())}}};
+      nlohmann::json overlay = nlohmann::json::object();
+      if (recording && link.has_ui()) {  // the teacher has just extracted this frame's features
+        overlay = overlay_to_json(
+            core::features::detected_overlay(teacher->last_frame_features()), "detected");
+      }
+      overlay["text"] = nlohmann::json::array(
+          {std::string(recording ? "REC " : "") + "frame " + std::to_string(frame->index) +
+           ", key images " + std::to_string(teacher->key_image_count())});
       link.publish_frame(*frame, overlay);
 
       // Command for the next frame period.
@@ -263,6 +273,19 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       core::memory::VisualMemory map = teacher->finish(options.config_json);
       core::memory::save_map(map, options.map_dir);
       result.map_saved = true;
+      if (robot.mock && !result.path_m.empty()) {
+        // finish() makes the last frame the final key image when the selector had not.
+        if (result.key_m.size() < map.key_images.size()) {
+          result.key_m.push_back(result.path_m.back());
+        }
+        try {
+          save_taught_path(options.map_dir,
+                           {robot.mock->world().name, result.path_m, result.key_m});
+        } catch (const std::exception& e) {
+          result.warnings.push_back(std::string("taught path not saved (top view only): ") +
+                                    e.what());
+        }
+      }
       const core::memory::MapSummary summary = core::memory::summarize(map);
       result.key_images = summary.key_image_count;
       nlohmann::json weak = nlohmann::json::array();

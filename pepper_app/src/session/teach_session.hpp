@@ -6,7 +6,9 @@
 // robot, from a scripted TeachDriver along the world's waypoints. The tour ends on the UI's
 // "finish" intent, when the scripted drive is done, or at max_distance_m / max_frames; the map
 // is then saved atomically (core::memory::save_map) and summarised, with a warning for each key
-// image with few features (lines + points < min_key_features).
+// image with few features (lines + points < min_key_features). On the mock robot the ground-truth
+// path goes next to it (taught_path.hpp). The UI's live image carries the frame's detected lines
+// and corners while recording.
 //
 // Safety: every way out (finish, Ctrl-C flag, exception, lost connection, stalled frames) sends
 // bridge.stop() FIRST; then the recording is kept (it can become a map with `map build`); then

@@ -7,6 +7,13 @@ namespace {
 
 nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
+// Whole pixels are enough to draw and keep a frame's overlay at a few KB of JSON.
+long px(float v) { return std::lround(v); }
+
+// Colours of the page's legend: lines green, points red (distinct on a grey camera image).
+constexpr const char* kLineColor = "#22c55e";
+constexpr const char* kPointColor = "#ef4444";
+
 }  // namespace
 
 nlohmann::json command_to_json(const core::navigator::Command& c) {
@@ -59,6 +66,25 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
         {"control", t.timings.control_ms},
         {"total", t.timings.total_ms}}},
   };
+}
+
+nlohmann::json overlay_to_json(const core::features::FeatureOverlay& o, const std::string& what) {
+  nlohmann::json segments = nlohmann::json::array();
+  for (const auto& s : o.lines) {
+    segments.push_back({px(s.p0_px.x), px(s.p0_px.y), px(s.p1_px.x), px(s.p1_px.y)});
+  }
+  nlohmann::json uv = nlohmann::json::array();
+  for (const auto& p : o.points_px) uv.push_back({px(p.x), px(p.y)});
+  nlohmann::json lines = {{"label", what + " lines"},
+                          {"color", kLineColor},
+                          {"width_px", 2},
+                          {"segments", std::move(segments)}};
+  nlohmann::json points = {{"label", what + " points"},
+                           {"color", kPointColor},
+                           {"radius_px", 3},
+                           {"uv", std::move(uv)}};
+  return {{"lines", nlohmann::json::array({std::move(lines)})},
+          {"points", nlohmann::json::array({std::move(points)})}};
 }
 
 }  // namespace pepper::app

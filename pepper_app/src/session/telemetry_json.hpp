@@ -1,8 +1,14 @@
 #pragma once
 // JSON form of the navigator's per-frame output, shared by replay-log, the teach UI and the
 // replay recorder. Field names are the telemetry's own (units in names); NaN becomes null.
+// The feature overlay is not part of telemetry_to_json (per-frame logs stay small); the teach UI
+// gets it from overlay_to_json in its frame header format (docs/teach_ui.md "Frame").
+
+#include <string>
 
 #include <nlohmann/json.hpp>
+
+#include "core/features/feature_overlay.hpp"
 
 #include "core/navigator/navigator.hpp"
 
@@ -10,5 +16,11 @@ namespace pepper::app {
 
 nlohmann::json command_to_json(const core::navigator::Command& command);
 nlohmann::json telemetry_to_json(const core::navigator::Telemetry& telemetry);
+
+/// {"lines":[{label, color, width_px, segments:[[u0,v0,u1,v1],...]}],
+///  "points":[{label, color, radius_px, uv:[[u,v],...]}]} with pixels rounded to integers;
+/// the labels are "<what> lines" and "<what> points" (e.g. what = "detected").
+nlohmann::json overlay_to_json(const core::features::FeatureOverlay& overlay,
+                               const std::string& what);
 
 }  // namespace pepper::app

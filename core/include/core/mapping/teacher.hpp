@@ -58,6 +58,9 @@ class Teacher {
 
   int64_t frames_seen() const { return frames_; }
   int key_image_count() const { return static_cast<int>(keys_.size()); }
+  /// Features of the frame given to the last add_frame (lines, corners; no pyramid), e.g. to
+  /// draw them in the teach UI. Throws std::logic_error before the first frame or after finish().
+  const features::ImageFeatures& last_frame_features() const;
 
  private:
   struct Stored {

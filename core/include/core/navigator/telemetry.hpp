@@ -1,11 +1,14 @@
 #pragma once
 // The navigator's outputs: the command for the base and one telemetry record per frame.
 // Plain data (no behaviour) so the app, the UI and recorders can copy and serialise it.
+// `overlay` is for display only (a few KB per frame at most).
 // Units in names; NaN marks a value that was not computed this frame; -1 marks an absent
 // key-image index. Timings are wall-clock durations (telemetry only, never used by the command).
 
 #include <cstdint>
 #include <limits>
+
+#include "core/features/feature_overlay.hpp"
 
 namespace pepper::core::navigator {
 
@@ -68,6 +71,9 @@ struct Telemetry {
   bool localization_ran = false;
   int localization_best = -1, localization_best_count = 0, localization_verified = 0;
   StageTimings timings;
+  /// Current frame's verified matches with IN (overlay.key_index) at their pixel positions,
+  /// taken after switching; empty when no segment was tracked this frame.
+  features::FeatureOverlay overlay;
 };
 
 }  // namespace pepper::core::navigator
