@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -225,6 +226,21 @@ cv::Point2f shift_from_lines(const ImageFeatures& a, const ImageFeatures& b,
   return shift;
 }
 
+// Planar prior of the key image's motion w.r.t. the hub from the point branch's essential matrix
+// (three-view lines); none without a usable E.
+std::optional<geometry::PlanarViewPrior> prior_of(const TwoViewMatches& key_to_hub, double focal_px,
+                                                  const geometry::PlanarTrifocalOptions& o) {
+  if (!key_to_hub.essential_found) return std::nullopt;
+  std::vector<cv::Point2d> key, hub;
+  key.reserve(key_to_hub.points.size());
+  hub.reserve(key_to_hub.points.size());
+  for (const auto& m : key_to_hub.points) {
+    key.push_back(m.a_norm);
+    hub.push_back(m.b_norm);
+  }
+  return geometry::planar_view_prior(key_to_hub.E_b_a, key, hub, focal_px, o);
+}
+
 }  // namespace
 
 std::vector<std::string> LineMatchOptions::validate() const {
@@ -397,7 +413,16 @@ ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches&
     cand.push_back({xi, m.idx_b, m.idx_a});
   }
   r.line_candidates = static_cast<int>(cand.size());
-  r.trifocal = geometry::verify_line_triplets(triplets, focal_of(hub), options.trifocal);
+  // Seeded by the two essential matrices when both are usable (planar_trifocal.hpp).
+  const double f = focal_of(hub);
+  std::optional<geometry::PlanarViewPrior> prior_x, prior_y;
+  if (options.trifocal.prior_from_points) {
+    prior_x = prior_of(x_to_hub, f, options.trifocal);
+    if (prior_x) prior_y = prior_of(y_to_hub, f, options.trifocal);
+  }
+  r.trifocal = prior_x && prior_y ? geometry::verify_line_triplets(triplets, f, options.trifocal,
+                                                                   {*prior_x, *prior_y})
+                                  : geometry::verify_line_triplets(triplets, f, options.trifocal);
   for (int i : r.trifocal.inliers) r.lines.push_back(cand[static_cast<size_t>(i)]);
 
   // Points: verified tracks X -> hub and Y -> hub meeting in the hub (mutual nearest).

@@ -44,9 +44,17 @@ bool fit_linear(const std::vector<cv::Point2d>& a, const std::vector<cv::Point2d
   return E.allFinite();
 }
 
-// Points of `idx` in front of both cameras for the best of the four decompositions of E.
-std::vector<int> in_front(const Eigen::Matrix3d& E, const std::vector<cv::Point2d>& a,
-                          const std::vector<cv::Point2d>& b, const std::vector<int>& idx) {
+struct Decomposition {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  std::vector<int> in_front;  // indices of `idx` in front of both cameras
+  size_t runner_up = 0;       // in-front count of the second-best decomposition
+};
+
+// The one of E's four (R, t) decompositions with the most points of `idx` in front of both
+// cameras.
+Decomposition best_decomposition(const Eigen::Matrix3d& E, const std::vector<cv::Point2d>& a,
+                                 const std::vector<cv::Point2d>& b, const std::vector<int>& idx) {
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
   if (U.determinant() < 0) U = -U;
@@ -55,7 +63,10 @@ std::vector<int> in_front(const Eigen::Matrix3d& E, const std::vector<cv::Point2
   W << 0, -1, 0, 1, 0, 0, 0, 0, 1;
   const Eigen::Matrix3d Rs[2] = {U * W * V.transpose(), U * W.transpose() * V.transpose()};
   const Eigen::Vector3d u3 = U.col(2);
-  std::vector<int> best;
+  Decomposition best;
+  best.R = Rs[0];
+  best.t = u3;
+  bool first = true;
   for (const auto& R : Rs) {
     for (double sgn : {1.0, -1.0}) {
       const Eigen::Vector3d t = sgn * u3;
@@ -72,7 +83,15 @@ std::vector<int> in_front(const Eigen::Matrix3d& E, const std::vector<cv::Point2
         const double lb = la * Rxa.z() + t.z();
         if (la > 0 && lb > 0) ok.push_back(i);
       }
-      if (ok.size() > best.size()) best = std::move(ok);
+      if (first || ok.size() > best.in_front.size()) {
+        if (!first) best.runner_up = best.in_front.size();
+        best.R = R;
+        best.t = t;
+        best.in_front = std::move(ok);
+        first = false;
+      } else {
+        best.runner_up = std::max(best.runner_up, ok.size());
+      }
     }
   }
   return best;
@@ -142,7 +161,7 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
   // Cheirality: of the four (R, t) decompositions of E, take the one with the most points in
   // front of both cameras and keep those points.
   if (static_cast<int>(inl.size()) >= options.min_inliers) {
-    std::vector<int> kept = in_front(Em, a_norm, b_norm, inl);
+    std::vector<int> kept = best_decomposition(Em, a_norm, b_norm, inl).in_front;
     // With little translation (near pure rotation) depths are noise and about half the true
     // matches fail: apply the test only when it keeps a clear majority.
     if (kept.size() >= 0.8 * static_cast<double>(inl.size())) inl = std::move(kept);
@@ -156,6 +175,28 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) r.E_b_a(i, j) = Em(i, j);
   return r;
+}
+
+RelativePose recover_relative_pose(const cv::Matx33d& E_b_a, const std::vector<cv::Point2d>& a_norm,
+                                   const std::vector<cv::Point2d>& b_norm) {
+  if (a_norm.size() != b_norm.size()) {
+    throw std::invalid_argument("recover_relative_pose: " + std::to_string(a_norm.size()) +
+                                " points in a, " + std::to_string(b_norm.size()) + " in b");
+  }
+  Eigen::Matrix3d E;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) E(i, j) = E_b_a(i, j);
+  std::vector<int> all(a_norm.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  const Decomposition d = best_decomposition(E, a_norm, b_norm, all);
+  RelativePose p;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) p.R_b_a(i, j) = d.R(i, j);
+    p.t_b_a[i] = d.t(i);
+  }
+  p.in_front = static_cast<int>(d.in_front.size());
+  p.in_front_runner_up = static_cast<int>(d.runner_up);
+  return p;
 }
 
 }  // namespace pepper::core::geometry

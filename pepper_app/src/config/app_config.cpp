@@ -88,6 +88,16 @@ template <class V> void visit(V& v, cg::PlanarTrifocalOptions& o) {
   v("optimal_threshold_px", o.optimal_threshold_px);
   v("check_overlap", o.check_overlap);
   v("overlap_margin_px", o.overlap_margin_px);
+  v("overlap_min_plane_sine", o.overlap_min_plane_sine);
+  v("prior_from_points", o.prior_from_points);
+  v("prior_min_points", o.prior_min_points);
+  v("prior_max_tilt_rad", o.prior_max_tilt_rad);
+  v("prior_max_t_y", o.prior_max_t_y);
+  v("prior_min_parallax_px", o.prior_min_parallax_px);
+  v("prior_min_cheirality", o.prior_min_cheirality);
+  v("prior_min_samples", o.prior_min_samples);
+  v("prior_max_challengers", o.prior_max_challengers);
+  v("prior_replace_ratio", o.prior_replace_ratio);
   v("seed", o.seed);
 }
 template <class V> void visit(V& v, cf::MatcherOptions& o) {

@@ -50,6 +50,28 @@ TEST(Essential, DegenerateIdenticalPointsDoNotCrash) {
   EXPECT_TRUE(r.inliers.empty() || r.found);
 }
 
+TEST(Essential, RelativePoseByCheiralityHasTheTrueRotationAndSignedTranslation) {
+  const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
+  const PlanarPose key{0.0, 0.0, 0.0}, cur{0.08, 0.1, 0.5};
+  test::SceneOptions so;
+  so.outlier_fraction = 0.0;
+  so.pixel_noise_px = 0.3;
+  test::SyntheticScene scene(k, so, 5);
+  const auto d = scene.points(key, cur);
+  const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px);
+  ASSERT_TRUE(r.found);
+  const RelativePose pose = recover_relative_pose(r.E_b_a, d.a_norm, d.b_norm);
+  // X_cur = R X_key + t with R = R_y(yaw_cur - yaw_key), t along R_y(yaw_cur) (C_key - C_cur).
+  const cv::Matx33d R_true = test::rot_y(cur.yaw_rad - key.yaw_rad);
+  const cv::Vec3d t_true = cv::normalize(
+      test::rot_y(cur.yaw_rad) * cv::Vec3d(key.cx_m - cur.cx_m, 0.0, key.cz_m - cur.cz_m));
+  EXPECT_LT(cv::norm(pose.R_b_a - R_true), 0.01);
+  EXPECT_GT(pose.t_b_a.dot(t_true), 0.99);
+  EXPECT_EQ(pose.in_front, static_cast<int>(d.a_norm.size()));
+  EXPECT_LT(pose.in_front_runner_up, pose.in_front / 2);
+  EXPECT_THROW(recover_relative_pose(r.E_b_a, d.a_norm, {}), std::invalid_argument);
+}
+
 TEST(Essential, MismatchedSizesThrow) {
   std::vector<cv::Point2d> a(10), b(9);
   EXPECT_THROW(verify_essential(a, b, 500.0), std::invalid_argument);

@@ -36,4 +36,18 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
                                  const std::vector<cv::Point2d>& b_norm, double focal_px,
                                  const EssentialRansacOptions& options = {});
 
+/// Relative pose X_b = R_b_a X_a + t_b_a (|t_b_a| = 1) of the one of E's four decompositions
+/// that puts the most correspondences in front of both cameras (cheirality).
+struct RelativePose {
+  cv::Matx33d R_b_a = cv::Matx33d::eye();
+  cv::Vec3d t_b_a{0.0, 0.0, 0.0};
+  int in_front = 0;            ///< correspondences in front of both cameras under this pose
+  int in_front_runner_up = 0;  ///< the same count for the second-best decomposition
+};
+
+/// Decomposes E (x_b^T E x_a = 0) by cheirality on the given correspondences (normalised
+/// coordinates, typically the verified inliers). Throws std::invalid_argument if sizes differ.
+RelativePose recover_relative_pose(const cv::Matx33d& E_b_a, const std::vector<cv::Point2d>& a_norm,
+                                   const std::vector<cv::Point2d>& b_norm);
+
 }  // namespace pepper::core::geometry

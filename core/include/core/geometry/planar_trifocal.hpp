@@ -18,11 +18,35 @@
 // hypothesis), then the three triplets give the translation as the null vector of a 3x4 system.
 // Score (MSAC): for each triplet the 3D line is triangulated from each pair of views and
 // reprojected into the third; the residual is the smallest of the three transfers (larger endpoint
-// distance, pixels = normalised x focal_px). One local optimisation (Levenberg-Marquardt on all
-// transfers weighted by their conditioning), adaptive stopping for `confidence`, at least
-// `min_iterations` samples, a final LM. Final inliers: best transfer <= 2 x threshold_px, RMS
-// endpoint distance after an optimal per-triplet line fit <= optimal_threshold_px, and the
-// segments of views 0-1 and 0-2 overlapping along epipolar lines (check_overlap).
+// distance, pixels = normalised x focal_px). One local optimisation, adaptive stopping for
+// `confidence`, at least `min_iterations` samples, a final LM. The local optimisation is
+// Levenberg-Marquardt (Cauchy loss) on all three transfers weighted by their conditioning, over
+// the "consistent" triplets only: all transfers small and, where the 3D line is defined, segments
+// overlapping on one side of the cameras (outliers in the LM set hold it at a wrong fixed point).
+// Final inliers: best transfer <= 2 x threshold_px, RMS endpoint distance after an optimal
+// per-triplet line fit <= optimal_threshold_px, and (check_overlap) the segment check on the 3D
+// line: every endpoint is mapped onto the line triangulated from the best-conditioned pair of
+// planes, the three segments must overlap along it and lie in front of their cameras. The sign of
+// t, which the line constraints leave free, is the one that puts most lines in front; the
+// returned motion carries it. This check catches the wrong segment the transfers cannot: when two
+// views' planes coincide (a 3D line in an epipolar plane of that pair; for every line when two
+// views are a few cm apart), any line in the third view is consistent with some 3D line in that
+// plane, but rarely with one the other segments overlap in front of the cameras. Triplets whose
+// best pair of planes is within `overlap_min_plane_sine` of parallel are not judged.
+//
+// Seeded by a prior (verify_line_triplets with a PlanarMotionPrior). The point branch has already
+// verified KLT points view 1 -> view 0 and view 2 -> view 0 with five-point RANSAC; under planar
+// motion each essential matrix gives the yaw and the direction of t_i, sign included
+// (planar_view_prior: decomposition chosen by cheirality on those points, then a 2-DOF planar
+// refinement on their Sampson distances). Only the split of the common scale between t_1 and t_2
+// is unknown: t_1 = cos(phi) d_1, t_2 = sin(phi) d_2 with phi in [0, pi/2], and the translation
+// equation (b) of ONE triplet gives phi. Samples are single triplets (adaptive stopping with
+// P(clean) = w, at least `prior_min_samples`), scored as above; the best one gets the local
+// optimisation over all 5 DOF. Then up to `prior_max_challengers` unseeded 3-triplet samples try
+// to beat it (adaptive stopping from its support); a challenger with a lower MSAC cost replaces
+// the prior's model only if it verifies `prior_replace_ratio` times as many triplets (the prior
+// has the verified points behind it, a wrong model can tie on lines when many are
+// ill-conditioned). Without a prior (an E missing or degenerate) the estimator is the unseeded one.
 // Measured behaviour: docs/perception.md.
 //
 // Deterministic for a given seed. Expected outcomes are values (found = false with fewer than
@@ -30,6 +54,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,10 +95,38 @@ struct PlanarTrifocalOptions {
   int max_lo_runs = 1;              ///< local optimisations during sampling (then one at the end)
   double optimal_threshold_px = 1.5;  ///< final check: RMS endpoint distance after optimal
                                       ///< triangulation of the line under the model, px
-  bool check_overlap = true;        ///< final inliers must overlap along epipolars, in front
+  bool check_overlap = true;        ///< final inliers: segments overlap on the 3D line, in front
   double overlap_margin_px = 10.0;  ///< extra margin of that overlap check, px
+  double overlap_min_plane_sine = 0.1;  ///< that check judges a triplet only if its best pair of
+                                        ///< back-projected planes is at least this far from
+                                        ///< parallel (sine); below, the 3D line is undetermined
   uint64_t seed = 1;                ///< RNG seed (deterministic)
+  // Prior from the point branch (planar_view_prior, verify_line_triplets with a prior).
+  bool prior_from_points = true;    ///< features::verify_three_view seeds from its two E
+  int prior_min_points = 12;        ///< verified point pairs an essential matrix needs
+  double prior_max_tilt_rad = 0.0873;  ///< rotation off the vertical axis at most (5 deg)
+  double prior_max_t_y = 0.25;      ///< |t_y| / |t| at most (translation in the floor plane)
+  double prior_min_parallax_px = 1.0;  ///< median parallax after derotation at least (else the
+                                       ///< direction of t is noise: near-pure rotation)
+  double prior_min_cheirality = 0.9;  ///< fraction of the points in front under the chosen pose
+  int prior_min_samples = 10;       ///< single-triplet samples drawn at least
+  int prior_max_challengers = 20;   ///< unseeded 3-triplet samples drawn at most after a prior
+  double prior_replace_ratio = 1.2; ///< a challenger replaces the prior's model only if it
+                                    ///< verifies at least this many times as many triplets
   std::vector<std::string> validate() const;
+};
+
+/// Planar motion of view i w.r.t. view 0 from two-view point geometry: the yaw and the direction
+/// of t_i = (tx, 0, tz), sign included; the length of t_i is unknown.
+struct PlanarViewPrior {
+  double yaw_rad = 0.0;
+  cv::Vec2d t_dir_xz{0.0, 0.0};  ///< unit vector
+};
+
+/// Priors of views 1 and 2 (the search with a prior needs both).
+struct PlanarMotionPrior {
+  PlanarViewPrior view1;
+  PlanarViewPrior view2;
 };
 
 struct PlanarTrifocalResult {
@@ -82,6 +135,7 @@ struct PlanarTrifocalResult {
   std::vector<int> inliers;         ///< indices into the input triplets, increasing
   int iterations = 0;               ///< samples drawn
   int hypotheses = 0;               ///< models scored (a sample can give several yaw roots)
+  bool from_prior = false;          ///< the returned model came from the prior (not a challenger)
 };
 
 /// Verifies line triplets; see file comment. `focal_px` converts the pixel threshold.
@@ -89,6 +143,24 @@ struct PlanarTrifocalResult {
 PlanarTrifocalResult verify_line_triplets(const std::vector<LineTriplet>& triplets,
                                           double focal_px,
                                           const PlanarTrifocalOptions& options = {});
+
+/// The same seeded by a prior from the point branch (see file comment).
+PlanarTrifocalResult verify_line_triplets(const std::vector<LineTriplet>& triplets,
+                                          double focal_px, const PlanarTrifocalOptions& options,
+                                          const PlanarMotionPrior& prior);
+
+/// Seed of view i from the essential matrix E_0_i of view i -> view 0 (x_0^T E x_i = 0, as
+/// verify_essential returns it for a = view i, b = view 0) and its verified correspondences
+/// (normalised coordinates in view i and in view 0). std::nullopt when the prior would be
+/// unreliable: fewer than `prior_min_points` pairs, cheirality not decisive, rotation off the
+/// vertical axis, translation out of the floor plane, or too little parallax (near-pure
+/// rotation). Throws std::invalid_argument if the sizes differ, focal_px <= 0 or the options
+/// are invalid.
+std::optional<PlanarViewPrior> planar_view_prior(const cv::Matx33d& E_0_i,
+                                                 const std::vector<cv::Point2d>& view_i_norm,
+                                                 const std::vector<cv::Point2d>& view_0_norm,
+                                                 double focal_px,
+                                                 const PlanarTrifocalOptions& options = {});
 
 /// Residual (px) of one triplet under a model, as used for scoring (exposed for tests).
 double line_triplet_residual_px(const LineTriplet& triplet, const PlanarMotion3& motion,
