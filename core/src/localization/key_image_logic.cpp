@@ -151,18 +151,16 @@ SwitchUpdate KeyImageSwitcher::update(const SwitchCounts& counts, bool reached_f
   return u;
 }
 
-std::optional<double> median_scale_ratio(std::span<const cv::Point2d> key_norm,
-                                         std::span<const cv::Point2d> current_norm,
-                                         double min_separation_norm) {
+void append_point_scale_ratios(std::span<const cv::Point2d> key_norm,
+                               std::span<const cv::Point2d> current_norm,
+                               double min_separation_norm, std::vector<double>& ratios) {
   if (key_norm.size() != current_norm.size()) {
     throw std::invalid_argument("median_scale_ratio: sizes differ");
   }
   const size_t n = key_norm.size();
-  if (n < 3) return std::nullopt;
+  if (n < 2) return;
   // Pairs (i, i + n/2 ...) would bias towards one layout; all pairs up to a cap, deterministic.
   constexpr size_t kMaxPairs = 4000;
-  std::vector<double> ratios;
-  ratios.reserve(std::min(kMaxPairs, n * (n - 1) / 2));
   const size_t stride = std::max<size_t>(1, n * (n - 1) / 2 / kMaxPairs);
   size_t pair = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -175,10 +173,71 @@ std::optional<double> median_scale_ratio(std::span<const cv::Point2d> key_norm,
       ratios.push_back(db / da);
     }
   }
+}
+
+namespace {
+
+// Unit direction of a segment (zero vector when degenerate).
+cv::Point2d unit_direction(const cv::Point2d& p0, const cv::Point2d& p1) {
+  const cv::Point2d d = p1 - p0;
+  const double len = std::hypot(d.x, d.y);
+  return len > 1e-12 ? d * (1.0 / len) : cv::Point2d(0.0, 0.0);
+}
+
+// Distance of point q from the infinite line through p0 with unit direction u.
+double distance_to_line(const cv::Point2d& q, const cv::Point2d& p0, const cv::Point2d& u) {
+  const cv::Point2d w = q - p0;
+  return std::abs(w.x * u.y - w.y * u.x);
+}
+
+// Perpendicular separation of two nearly parallel segments, nullopt when they are not parallel
+// within max_angle_rad (sin of the angle between the directions).
+std::optional<double> parallel_separation(const cv::Point2d& p0, const cv::Point2d& p1,
+                                          const cv::Point2d& q0, const cv::Point2d& q1,
+                                          double max_sin) {
+  const cv::Point2d u = unit_direction(p0, p1);
+  const cv::Point2d v = unit_direction(q0, q1);
+  if (u == cv::Point2d(0.0, 0.0) || v == cv::Point2d(0.0, 0.0)) return std::nullopt;
+  if (std::abs(u.x * v.y - u.y * v.x) > max_sin) return std::nullopt;
+  const cv::Point2d mp = (p0 + p1) * 0.5;
+  const cv::Point2d mq = (q0 + q1) * 0.5;
+  return 0.5 * (distance_to_line(mq, p0, u) + distance_to_line(mp, q0, v));
+}
+
+}  // namespace
+
+void append_line_scale_ratios(std::span<const LineCorrespondence> lines, double max_angle_rad,
+                              double min_separation_norm, std::vector<double>& ratios) {
+  const double max_sin = std::sin(std::clamp(max_angle_rad, 0.0, 1.5));
+  for (size_t i = 0; i < lines.size(); ++i) {
+    for (size_t j = i + 1; j < lines.size(); ++j) {
+      const LineCorrespondence& l = lines[i];
+      const LineCorrespondence& m = lines[j];
+      const auto sa = parallel_separation(l.a0_norm, l.a1_norm, m.a0_norm, m.a1_norm, max_sin);
+      const auto sb = parallel_separation(l.b0_norm, l.b1_norm, m.b0_norm, m.b1_norm, max_sin);
+      if (!sa || !sb || *sa < min_separation_norm || *sb < min_separation_norm) continue;
+      ratios.push_back(*sb / *sa);
+    }
+  }
+}
+
+std::optional<double> median_ratio(std::vector<double>& ratios) {
   if (ratios.empty()) return std::nullopt;
   auto mid = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
   std::nth_element(ratios.begin(), mid, ratios.end());
   return *mid;
+}
+
+std::optional<double> median_scale_ratio(std::span<const cv::Point2d> key_norm,
+                                         std::span<const cv::Point2d> current_norm,
+                                         double min_separation_norm) {
+  if (key_norm.size() != current_norm.size()) {
+    throw std::invalid_argument("median_scale_ratio: sizes differ");
+  }
+  if (key_norm.size() < 3) return std::nullopt;
+  std::vector<double> ratios;
+  append_point_scale_ratios(key_norm, current_norm, min_separation_norm, ratios);
+  return median_ratio(ratios);
 }
 
 }  // namespace pepper::core::localization

@@ -17,6 +17,10 @@ std::vector<std::string> KeyImageSelectorOptions::validate() const {
     errors.push_back("mapping.relative = " + std::to_string(relative) +
                      " must be in [0, 1) (0: absolute epsilon only)");
   }
+  if (relative > 0.0 && relative < 1.0 && !(max_fraction > relative && max_fraction <= 1.0)) {
+    errors.push_back("mapping.max_fraction = " + std::to_string(max_fraction) +
+                     " must be in (relative, 1]");
+  }
   return errors;
 }
 
@@ -36,7 +40,9 @@ std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count) {
   last_ = c;
   if (options_.relative > 0.0 && c == key_ + 2) {
     reference_ = count;
-    threshold_ = std::max<double>(options_.epsilon, options_.relative * count);
+    // At least 1: a reference of 0 (nothing shared) must still let the count fall below it.
+    threshold_ = std::max(1.0, std::min(std::max<double>(options_.epsilon, options_.relative * count),
+                                        options_.max_fraction * count));
   }
   last_threshold_ = threshold_;
   last_reference_ = reference_;

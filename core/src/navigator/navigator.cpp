@@ -73,6 +73,10 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_line_matches >= 1, "min_line_matches", min_line_matches, ">= 1");
   check(min_point_matches >= 1, "min_point_matches", min_point_matches, ">= 1");
   check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
+  check(min_scale_lines >= 0, "min_scale_lines", min_scale_lines, ">= 0");
+  check(min_scale_pairs >= 1, "min_scale_pairs", min_scale_pairs, ">= 1");
+  check(scale_line_max_angle_rad > 0.0 && scale_line_max_angle_rad <= 0.5,
+        "scale_line_max_angle_rad", scale_line_max_angle_rad, "in (0, 0.5]");
   check(min_point_texture >= 0.0, "min_point_texture", min_point_texture, ">= 0");
   check(arrival_scale_ratio > 0.0 && arrival_scale_ratio < 2.0, "arrival_scale_ratio",
         arrival_scale_ratio, "in (0, 2)");
@@ -200,6 +204,33 @@ void Navigator::ensure_pyramids(const localization::Segment& seg) {
     if (wanted && f.klt_pyramid.empty()) features::build_klt_pyramid(f, options_.matcher.klt);
     if (!wanted && !f.klt_pyramid.empty()) features::release_klt_pyramid(f);
   }
+}
+
+std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
+                                             const features::ImageFeatures& key_image,
+                                             const features::ImageFeatures& current) const {
+  constexpr double kMinSeparationNorm = 0.05;
+  const PointSets s = point_sets(m);
+  const int n_points = static_cast<int>(s.key.size());
+  std::vector<double> ratios;
+  if (n_points >= options_.min_scale_points) {
+    localization::append_point_scale_ratios(s.key, s.current, kMinSeparationNorm, ratios);
+    return localization::median_ratio(ratios);
+  }
+  if (options_.min_scale_lines == 0 || m.n_lines() < options_.min_scale_lines) {
+    return std::nullopt;
+  }
+  std::vector<localization::LineCorrespondence> lines;
+  lines.reserve(m.lines.size());
+  for (const features::LineMatch& lm : m.lines) {
+    const features::LineSegment& a = key_image.lines.at(static_cast<size_t>(lm.idx_a));
+    const features::LineSegment& b = current.lines.at(static_cast<size_t>(lm.idx_b));
+    lines.push_back({a.p0_norm, a.p1_norm, b.p0_norm, b.p1_norm});
+  }
+  localization::append_line_scale_ratios(lines, options_.scale_line_max_angle_rad,
+                                         kMinSeparationNorm, ratios);
+  if (static_cast<int>(ratios.size()) < options_.min_scale_pairs) return std::nullopt;
+  return localization::median_ratio(ratios);
 }
 
 void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
@@ -357,14 +388,9 @@ StepResult Navigator::step(const Frame& frame) {
     localization::SwitchCounts counts;
     counts.two_view_next = tv_n.total();
     bool reached_final = false;
-    {
-      const PointSets s = point_sets(tv_n);
-      const bool enough = static_cast<int>(s.key.size()) >= options_.min_scale_points;
-      if (const auto ratio =
-              enough ? localization::median_scale_ratio(s.key, s.current) : std::nullopt) {
-        counts.next_scale_ratio = *ratio;
-        tel.next_scale_ratio = *ratio;
-      }
+    if (const auto ratio = scale_ratio(tv_n, key(seg.next), fm.current())) {
+      counts.next_scale_ratio = *ratio;
+      tel.next_scale_ratio = *ratio;
     }
     if (seg.next_next) {
       const int nn = *seg.next_next;

@@ -28,7 +28,7 @@ namespace {
 
 struct DemoArgs {
   CommonSessionArgs common;
-  std::string world = "worlds/robotics_room.yaml";
+  std::string world;  // empty: the default world (default_world())
   std::string out = "demo_out";
   double max_distance_m = 4.5;  // the first straight of robotics_room (its corner follows)
   uint64_t seed = 1;
@@ -41,7 +41,17 @@ std::string fmt(double v, int prec = 3) {
   return s.str();
 }
 
-int run_demo(const DemoArgs& a) {
+// worlds/robotics_room.yaml from the current folder (the README runs from the checkout), else
+// from the source tree this binary was built from, so `demo` also works from any folder.
+std::string default_world() {
+  const std::filesystem::path here = "worlds/robotics_room.yaml";
+  if (std::filesystem::exists(here)) return here.string();
+  return (std::filesystem::path(PEPPER_WORLDS_DIR) / "robotics_room.yaml").string();
+}
+
+int run_demo(const DemoArgs& args) {
+  DemoArgs a = args;
+  if (a.world.empty()) a.world = default_world();
   using Clock = std::chrono::steady_clock;
   try {
     CommonSessionArgs common = a.common;
@@ -213,7 +223,9 @@ void register_demo_command(CLI::App& app) {
       "perturbed start, and write an HTML report (top view, omega and feature plots, summary).\n"
       "With --ui the run can be watched live in a browser.");
   add_common_session_options(cmd, args->common, false);
-  cmd->add_option("--world", args->world, "World file")->check(CLI::ExistingFile);
+  cmd->add_option("--world", args->world,
+                  "World file (default: worlds/robotics_room.yaml of this checkout)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "Output folder (map, recording, telemetry, report.html)");
   cmd->add_option("--distance", args->max_distance_m, "Metres of the tour to teach (0 = all)")
       ->check(CLI::NonNegativeNumber);

@@ -113,6 +113,7 @@ template <class V> void visit(V& v, cm::KeyImageSelectorOptions& o) {
   v("epsilon", o.epsilon);
   v("min_frame_gap", o.min_frame_gap);
   v("relative", o.relative);
+  v("max_fraction", o.max_fraction);
 }
 template <class V> void visit(V& v, cc::IbvsOptions& o) {
   v.enumeration("features", o.mode, feature_mode_names());
@@ -158,6 +159,10 @@ template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v("min_point_matches", o.min_point_matches);
   v("min_point_texture", o.min_point_texture);
   v("arrival_scale_ratio", o.arrival_scale_ratio);
+  v("min_scale_points", o.min_scale_points);
+  v("min_scale_lines", o.min_scale_lines);
+  v("min_scale_pairs", o.min_scale_pairs);
+  v("scale_line_max_angle_rad", o.scale_line_max_angle_rad);
 }
 template <class V> void visit(V& v, RobotConfig& o) {
   v("camera_width_px", o.camera_width_px);

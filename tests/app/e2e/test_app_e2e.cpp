@@ -158,6 +158,22 @@ TEST(AppE2E, TeachThenReplayOnMockRobot) {
   EXPECT_TRUE(commands.back()["stop_move"].get<bool>());
 }
 
+// The README's main job: the demo teaches, replays from a perturbed start and must recognise
+// arrival at the final image (it used to drive 1 m past it, facing a wall with few points).
+TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
+  const fs::path dir = fresh_dir("demo");
+  Child demo({"demo", "--out", (dir / "out").string()}, dir, "demo");
+  ASSERT_EQ(demo.wait(std::chrono::seconds(240)), 0) << demo.both();
+  const auto replay = last_event(demo.out(), "replay_done");
+  ASSERT_TRUE(replay.is_object()) << demo.both();
+  EXPECT_EQ(replay["outcome"], "tour_complete");
+  const auto report = last_event(demo.out(), "report");
+  ASSERT_TRUE(report.is_object()) << demo.both();
+  EXPECT_TRUE(report["success"].get<bool>());
+  EXPECT_LT(report["final_error_m"].get<double>(), 0.3);
+  EXPECT_TRUE(fs::exists(report["path"].get<std::string>()));
+}
+
 TEST(AppE2E, SigintDuringTeachKeepsRecordingAndStopsRobot) {
   const fs::path dir = fresh_dir("sigint");
   const fs::path rec = dir / "rec";

@@ -187,5 +187,56 @@ TEST(MedianScaleRatio, GrowsToOneAtTheKeyPose) {
                                   std::vector<cv::Point2d>(at.begin(), at.begin() + 2)));
 }
 
+
+// Vertical wall lines (door frames, poster edges) at depth 4 m projected from depth z_m (camera
+// on the axis, looking at the wall): x_norm = X / z, y_norm = Y / z.
+LineCorrespondence wall_line(double x_m, double y0_m, double y1_m, double cut_a, double cut_b,
+                             double z_key_m, double z_cur_m) {
+  // cut_*: fraction of the segment a detector kept at each end (fragmentation differs per view)
+  LineCorrespondence c;
+  c.a0_norm = {x_m / z_key_m, (y0_m + cut_a) / z_key_m};
+  c.a1_norm = {x_m / z_key_m, (y1_m - cut_a) / z_key_m};
+  c.b0_norm = {x_m / z_cur_m, (y0_m + cut_b) / z_cur_m};
+  c.b1_norm = {x_m / z_cur_m, (y1_m - 2 * cut_b) / z_cur_m};
+  return c;
+}
+
+TEST(LineScaleRatio, ParallelSeparationsScaleLikePointsAndIgnoreFragmentation) {
+  // Key pose 4 m from the wall, current 5 m: the scene appears at 4/5 of the key's size.
+  std::vector<LineCorrespondence> lines;
+  const double xs[] = {-1.2, -0.7, 0.3, 0.9, 1.4};
+  for (int i = 0; i < 5; ++i) lines.push_back(wall_line(xs[i], -0.8, 0.6, 0.05 * i, 0.1, 4.0, 5.0));
+  std::vector<double> ratios;
+  append_line_scale_ratios(lines, 0.05, 0.05, ratios);
+  ASSERT_EQ(ratios.size(), 10u);  // every pair of the five vertical lines
+  for (double r : ratios) EXPECT_NEAR(r, 0.8, 1e-9);
+
+  // At the key pose: 1.
+  std::vector<LineCorrespondence> at;
+  for (int i = 0; i < 5; ++i) at.push_back(wall_line(xs[i], -0.8, 0.6, 0.0, 0.2, 4.0, 4.0));
+  ratios.clear();
+  append_line_scale_ratios(at, 0.05, 0.05, ratios);
+  ASSERT_FALSE(ratios.empty());
+  EXPECT_NEAR(*median_ratio(ratios), 1.0, 1e-9);
+}
+
+TEST(LineScaleRatio, SkipsNonParallelAndTooClosePairs) {
+  LineCorrespondence vertical = wall_line(0.0, -0.5, 0.5, 0.0, 0.0, 4.0, 4.0);
+  LineCorrespondence horizontal;
+  horizontal.a0_norm = horizontal.b0_norm = {-0.2, 0.1};
+  horizontal.a1_norm = horizontal.b1_norm = {0.2, 0.1};
+  LineCorrespondence near_twin = wall_line(0.1, -0.5, 0.5, 0.0, 0.0, 4.0, 4.0);  // 0.025 apart
+  std::vector<double> ratios;
+  const std::vector<LineCorrespondence> lines = {vertical, horizontal, near_twin};
+  append_line_scale_ratios(lines, 0.05, 0.05, ratios);
+  EXPECT_TRUE(ratios.empty());
+  EXPECT_FALSE(median_ratio(ratios).has_value());
+  // A degenerate (zero-length) segment is skipped, not divided by.
+  LineCorrespondence dot;
+  const std::vector<LineCorrespondence> with_dot = {vertical, dot};
+  append_line_scale_ratios(with_dot, 0.05, 0.05, ratios);
+  EXPECT_TRUE(ratios.empty());
+}
+
 }  // namespace
 }  // namespace pepper::core::localization

@@ -12,6 +12,7 @@ TEST(KeyImageSelector, ScriptedCounts) {
   KeyImageSelectorOptions o;
   o.epsilon = 10;
   o.min_frame_gap = 1;  // the paper's rule
+  o.relative = 0.0;
   KeyImageSelector s(o);
   EXPECT_EQ(s.key(), 0);
   EXPECT_FALSE(s.on_frame(1, 50));
@@ -31,6 +32,7 @@ TEST(KeyImageSelector, MinFrameGap) {
   KeyImageSelectorOptions o;
   o.epsilon = 10;
   o.min_frame_gap = 3;
+  o.relative = 0.0;
   KeyImageSelector s(o);
   EXPECT_FALSE(s.on_frame(1, 0));   // candidate 1: gap 1 < 3
   EXPECT_FALSE(s.on_frame(2, 0));   // candidate 1: gap 1
@@ -64,6 +66,22 @@ TEST(KeyImageSelector, RelativeThresholdFollowsEachKeyImagesReference) {
   EXPECT_EQ(s.threshold(), 20.0);      // the absolute floor wins on a poor image
   EXPECT_FALSE(s.on_frame(7, 20));
   EXPECT_EQ(*s.on_frame(8, 19), 7);
+  // A reference near epsilon: the threshold is capped at max_fraction (0.7) of it, so a key
+  // image needs 30 % of the reference gone instead of firing at once.
+  EXPECT_FALSE(s.on_frame(9, 22));      // key 7 + 2: reference 22 -> min(max(20, 11), 15.4)
+  EXPECT_NEAR(s.threshold(), 15.4, 1e-12);
+  EXPECT_FALSE(s.on_frame(10, 19));     // below epsilon but not below the cap: no key image
+  EXPECT_FALSE(s.on_frame(11, 16));
+  EXPECT_EQ(*s.on_frame(12, 15), 11);
+  // Nothing shared at the reference frame: the threshold stays at least 1.
+  EXPECT_FALSE(s.on_frame(13, 0));      // key 11 + 2: reference 0 -> threshold 1 (gap 1)
+  EXPECT_EQ(s.threshold(), 1.0);
+  EXPECT_FALSE(s.on_frame(14, 0));      // gap 2
+  EXPECT_EQ(*s.on_frame(15, 0), 14);
+  o.max_fraction = 0.5;                 // not above relative
+  EXPECT_EQ(o.validate().size(), 1u);
+  o.max_fraction = 1.0;
+  EXPECT_TRUE(o.validate().empty());
   o.relative = 1.0;
   EXPECT_EQ(o.validate().size(), 1u);
   o.relative = -0.1;

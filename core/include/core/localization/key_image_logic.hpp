@@ -134,4 +134,29 @@ std::optional<double> median_scale_ratio(std::span<const cv::Point2d> key_norm,
                                          std::span<const cv::Point2d> current_norm,
                                          double min_separation_norm = 0.05);
 
+/// The per-pair ratios behind median_scale_ratio, appended to `ratios` (capped at 4000 pairs,
+/// deterministic subsampling). Throws std::invalid_argument when the sizes differ.
+void append_point_scale_ratios(std::span<const cv::Point2d> key_norm,
+                               std::span<const cv::Point2d> current_norm,
+                               double min_separation_norm, std::vector<double>& ratios);
+
+/// A matched line segment: endpoints in normalised coordinates, key image (a) and current (b).
+struct LineCorrespondence {
+  cv::Point2d a0_norm, a1_norm;
+  cv::Point2d b0_norm, b1_norm;
+};
+
+/// Apparent scale from line matches, for when points are too few (facing a wall with posters and
+/// door frames): for every pair of matched lines that are nearly parallel in both views (angle
+/// below max_angle_rad), the ratio current / key of their perpendicular separation (the mean
+/// distance of each segment's midpoint from the other's supporting line). A separation
+/// perpendicular to the lines does not depend on where a detector cuts the segments, so
+/// fragmented or shortened segments do not bias it. Appended to `ratios`; pairs closer than
+/// min_separation_norm in either view are skipped.
+void append_line_scale_ratios(std::span<const LineCorrespondence> lines, double max_angle_rad,
+                              double min_separation_norm, std::vector<double>& ratios);
+
+/// Median of `ratios` (reordered), nullopt when empty.
+std::optional<double> median_ratio(std::vector<double>& ratios);
+
 }  // namespace pepper::core::localization

@@ -72,6 +72,16 @@ struct NavigatorOptions {
   /// at least this many verified point matches (fewer: unknown). Measured: with ~15 matches far
   /// from IN the ratio read 1.1..1.2 and fired "passed IN" spuriously. >= 3.
   int min_scale_points = 20;
+  /// With fewer points than min_scale_points the ratio comes from the matched lines alone
+  /// (pairs nearly parallel in both views, key_image_logic.hpp append_line_scale_ratios) when
+  /// there are at least min_scale_lines of them and at least min_scale_pairs ratios; 0: points
+  /// only. Why: facing the wall at the end of a tour the points with the final image drop below
+  /// 20 while 10-25 lines remain, and arrival was never seen (measured: the demo drove 1 m past
+  /// the final image, docs/method/localization.md). The few points are not pooled in: 10 points
+  /// read a ratio of 4.5 in a turn and fired "passed IN" 0.6 m early (same document). >= 0.
+  int min_scale_lines = 8;
+  int min_scale_pairs = 6;  ///< >= 1
+  double scale_line_max_angle_rad = 0.05;  ///< "nearly parallel" for line pairs, (0, 0.5]
   /// Arrival at the final image: median scale ratio (key -> current) of the point matches with
   /// IN at least this (1 = exactly the key image's apparent scale), in (0, 2).
   double arrival_scale_ratio = 0.98;
@@ -100,6 +110,10 @@ class Navigator {
 
  private:
   void localize(features::FrameMatcher& fm, Telemetry& tel);
+  /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
+  std::optional<double> scale_ratio(const features::TwoViewMatches& m,
+                                    const features::ImageFeatures& key_image,
+                                    const features::ImageFeatures& current) const;
   std::optional<double> ibvs_omega(features::FrameMatcher& fm, Telemetry& tel);
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
