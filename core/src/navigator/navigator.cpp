@@ -32,6 +32,8 @@ const char* to_string(NavState s) {
       return "lost";
     case NavState::kTourComplete:
       return "tour_complete";
+    case NavState::kOverdue:
+      return "overdue";
   }
   return "unknown";
 }
@@ -46,6 +48,8 @@ const char* to_string(StopReason r) {
       return "features_lost";
     case StopReason::kTourComplete:
       return "tour_complete";
+    case StopReason::kSegmentOverdue:
+      return "segment_overdue";
   }
   return "unknown";
 }
@@ -73,6 +77,9 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_line_matches >= 1, "min_line_matches", min_line_matches, ">= 1");
   check(min_point_matches >= 1, "min_point_matches", min_point_matches, ">= 1");
   check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
+  check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
+  check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
+        static_cast<double>(segment_overdue_min_ns), ">= 0");
   check(min_scale_lines >= 0, "min_scale_lines", min_scale_lines, ">= 0");
   check(min_scale_pairs >= 1, "min_scale_pairs", min_scale_pairs, ">= 1");
   check(scale_line_max_angle_rad > 0.0 && scale_line_max_angle_rad <= 0.5,
@@ -194,6 +201,7 @@ void Navigator::reset() {
   last_t_ns_.reset();
   vnhv_segment_next_ = -1;
   vnhv_prev_in_next_.reset();
+  segment_start_t_ns_.reset();
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -231,6 +239,16 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
                                          kMinSeparationNorm, ratios);
   if (static_cast<int>(ratios.size()) < options_.min_scale_pairs) return std::nullopt;
   return localization::median_ratio(ratios);
+}
+
+bool Navigator::segment_overdue(int64_t t_ns) const {
+  if (options_.segment_overdue_factor <= 0.0 || !switcher_ || !segment_start_t_ns_) return false;
+  const localization::Segment& seg = switcher_->segment();
+  const double taught_ns = static_cast<double>(map_.key_images[seg.next].t_ns -
+                                               map_.key_images[seg.prev].t_ns);
+  const double allowed_ns = std::max(static_cast<double>(options_.segment_overdue_min_ns),
+                                     options_.segment_overdue_factor * taught_ns);
+  return static_cast<double>(t_ns - *segment_start_t_ns_) > allowed_ns;
 }
 
 void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
@@ -360,6 +378,7 @@ StepResult Navigator::step(const Frame& frame) {
     return out;
   };
   if (state_ == NavState::kTourComplete) return finish(stop_command(StopReason::kTourComplete));
+  if (state_ == NavState::kOverdue) return finish(stop_command(StopReason::kSegmentOverdue));
 
   const bool need_localization = state_ == NavState::kNotLocalized || state_ == NavState::kLost;
   auto t0 = Clock::now();
@@ -375,6 +394,7 @@ StepResult Navigator::step(const Frame& frame) {
       return finish(stop_command(before == NavState::kLost ? StopReason::kFeaturesLost
                                                            : StopReason::kNotLocalized));
     }
+    segment_start_t_ns_ = frame.t_ns;
   }
 
   // Switching (counts on the current segment).
@@ -432,7 +452,17 @@ StepResult Navigator::step(const Frame& frame) {
       tel.timings.match_ms = ms_since(t0);
       return finish(stop_command(StopReason::kTourComplete));
     }
-    if (tel.switched) ensure_pyramids(switcher_->segment());
+    if (tel.switched) {
+      ensure_pyramids(switcher_->segment());
+      segment_start_t_ns_ = frame.t_ns;
+    }
+    if (segment_overdue(frame.t_ns)) {
+      state_ = NavState::kOverdue;
+      schedule_.reset();
+      has_command_ = false;
+      tel.timings.match_ms = ms_since(t0);
+      return finish(stop_command(StopReason::kSegmentOverdue));
+    }
   }
 
   // Control on the (possibly new) segment.

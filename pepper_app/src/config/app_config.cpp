@@ -163,6 +163,8 @@ template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v("min_scale_lines", o.min_scale_lines);
   v("min_scale_pairs", o.min_scale_pairs);
   v("scale_line_max_angle_rad", o.scale_line_max_angle_rad);
+  v("segment_overdue_factor", o.segment_overdue_factor);
+  v("segment_overdue_min_ns", o.segment_overdue_min_ns);
 }
 template <class V> void visit(V& v, RobotConfig& o) {
   v("camera_width_px", o.camera_width_px);

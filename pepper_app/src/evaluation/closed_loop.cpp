@@ -290,6 +290,12 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
       r.detail = gt.collision ? gt.collision->what : "";
       break;
     }
+    if (step && step->telemetry.state == nav::NavState::kOverdue) {
+      r.outcome = "overdue";
+      r.detail = "navigator stopped: no switch after key image " +
+                 std::to_string(step->telemetry.ip) + " for far longer than teaching took";
+      break;
+    }
     if (r.tour_complete) {
       // Let the base come to rest (it decelerates at its limits), then measure.
       if (std::abs(gt.velocity.v_x_m_s) < 1e-3 && std::abs(gt.velocity.omega_rad_s) < 1e-3) break;

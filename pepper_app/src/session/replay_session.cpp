@@ -57,6 +57,7 @@ std::string replay_state_name(nav::NavState s) {
     case nav::NavState::kNotLocalized: return "localising";
     case nav::NavState::kTourComplete: return "finished";
     case nav::NavState::kLost: return "stopped";
+    case nav::NavState::kOverdue: return "stopped";
     default: return "running";
   }
 }
@@ -263,6 +264,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         link.publish_state({{"replay", {{"state", "finished"},
                                         {"key_index", t.in},
                                         {"key_count", result.key_image_count}}}});
+        break;
+      }
+      if (t.state == nav::NavState::kOverdue) {
+        end_with("overdue", "no key-image switch after key image " + std::to_string(t.ip) +
+                                " for far longer than teaching took: stopped, unsure where the "
+                                "robot is (end of tour not visible?)");
         break;
       }
       if (gave_up) {

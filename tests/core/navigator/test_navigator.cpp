@@ -79,6 +79,57 @@ TEST(Navigator, VanishingFeaturesHoldThenStopWithReason) {
   EXPECT_FALSE(r.command.stop);
 }
 
+TEST(Navigator, StopsForGoodWhenASegmentIsOverdue) {
+  // The robot makes no progress (the same view again and again, as when the end of a tour
+  // cannot be recognised): no switch ever happens, so after the overdue time the navigator
+  // stops and stays stopped even though it still sees its features.
+  NavigatorOptions o;
+  o.segment_overdue_factor = 0.5;  // the test tour's segments last several seconds
+  o.segment_overdue_min_ns = 3'000'000'000;  // 3 s
+  Navigator nav(tour().map, o);
+  const Frame& view = tour().frames[5];
+  std::vector<StepResult> out;
+  for (int i = 0; i < 40; ++i) {  // 8 s at 5 Hz
+    Frame f = view;
+    f.t_ns = view.t_ns + i * 200'000'000LL;
+    f.index = i;
+    out.push_back(nav.step(f));
+  }
+  ASSERT_EQ(out.front().telemetry.state, NavState::kNavigating);
+  ASSERT_FALSE(out.front().command.stop);
+  const localization::Segment first{out.front().telemetry.ip, out.front().telemetry.in, {}};
+  const auto& keys = tour().map.key_images;
+  const double taught_s = (keys[first.next].t_ns - keys[first.prev].t_ns) * 1e-9;
+  const double allowed_s = std::max(3.0, 0.5 * taught_s);
+  ASSERT_LT(allowed_s, 7.0) << "the test tour's first segment is too long for this test";
+  int first_stop = -1;
+  for (int i = 0; i < 40; ++i) {
+    if (out[i].command.stop && first_stop < 0) first_stop = i;
+    if (first_stop >= 0) {
+      EXPECT_TRUE(out[i].command.stop) << i;
+      EXPECT_EQ(out[i].command.reason, StopReason::kSegmentOverdue) << i;
+      EXPECT_EQ(out[i].telemetry.state, NavState::kOverdue) << i;
+    }
+  }
+  ASSERT_GE(first_stop, 0);
+  for (int i = 0; i < first_stop; ++i) EXPECT_EQ(out[i].telemetry.in, first.next) << i;
+  // The first stop comes with the first frame past the allowed time.
+  EXPECT_NEAR(first_stop * 0.2, allowed_s, 0.2 + 1e-9);
+  // reset() clears it: the same view navigates again.
+  nav.reset();
+  Frame f = view;
+  f.t_ns = view.t_ns + 100 * 200'000'000LL;
+  EXPECT_FALSE(nav.step(f).command.stop);
+  // Off: never overdue.
+  o.segment_overdue_factor = 0.0;
+  Navigator never(tour().map, o);
+  for (int i = 0; i < 40; ++i) {
+    Frame g = view;
+    g.t_ns = view.t_ns + i * 200'000'000LL;
+    EXPECT_FALSE(never.step(g).command.stop) << i;
+  }
+}
+
 TEST(Navigator, NotLocalisedOnAnUnknownViewStops) {
   Navigator nav(tour().map);
   Frame f;

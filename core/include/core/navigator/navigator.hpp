@@ -14,6 +14,10 @@
 //                  whole map on each frame; back to kNavigating when that succeeds.
 //   kTourComplete  IN was the final image and arrival was seen (key_image_logic.hpp): stop
 //                  (reason kTourComplete) on every further frame.
+//   kOverdue       the robot stayed on one segment (IP, IN) much longer than the teach took
+//                  between IP and IN (segment_overdue_*): the navigator is unsure where it is
+//                  (typically the end of the tour cannot be seen: a blank wall) and stops for
+//                  good (reason kSegmentOverdue) until reset(); the operator decides.
 // Per frame in kNavigating: with a FrameMatcher on the current frame: n(Ia, IN), n(Ia, INN),
 // and, only when they can change the decision (lazy, same outcome), n(IP, Ia) and the
 // three-view counts (IP, Ia, IN), (Ia, IN, INN) -> KeyImageSwitcher; then, on the (new)
@@ -85,6 +89,15 @@ struct NavigatorOptions {
   /// Arrival at the final image: median scale ratio (key -> current) of the point matches with
   /// IN at least this (1 = exactly the key image's apparent scale), in (0, 2).
   double arrival_scale_ratio = 0.98;
+  /// Overdue segment: stop for good when no switch happened for longer than
+  /// max(segment_overdue_min_ns, segment_overdue_factor * (t_ns of IN - t_ns of IP in the map)),
+  /// frame time. Why: with too few features to switch or to see arrival (measured: the end of
+  /// worlds/white_corridor.yaml before it got an end door) the robot drove on with the last
+  /// segment's command, towards the wall 5 m further, until the evaluation cut it off.
+  /// Replay runs at 0.15 m/s, slower than most teach drives; factor 4 leaves room for that and
+  /// for a slow start from a perturbed pose. factor 0: off. factor >= 0, min_ns >= 0.
+  double segment_overdue_factor = 4.0;
+  int64_t segment_overdue_min_ns = 10'000'000'000;
   std::vector<std::string> validate() const;
 };
 
@@ -110,6 +123,8 @@ class Navigator {
 
  private:
   void localize(features::FrameMatcher& fm, Telemetry& tel);
+  /// True when the current segment has lasted longer than segment_overdue_* allow at t_ns.
+  bool segment_overdue(int64_t t_ns) const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
   std::optional<double> scale_ratio(const features::TwoViewMatches& m,
                                     const features::ImageFeatures& key_image,
@@ -128,6 +143,7 @@ class Navigator {
   Command last_command_;
   bool has_command_ = false;
   int64_t last_good_t_ns_ = 0;
+  std::optional<int64_t> segment_start_t_ns_;  ///< frame time when the current segment began
   std::optional<int64_t> last_t_ns_;
   // VNHV: planar pose of IP in IN's frame, per segment (computed once when the segment starts).
   int vnhv_segment_next_ = -1;

@@ -14,12 +14,13 @@ namespace pepper::core::navigator {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-enum class NavState { kNotLocalized, kNavigating, kHolding, kLost, kTourComplete };
+enum class NavState { kNotLocalized, kNavigating, kHolding, kLost, kTourComplete, kOverdue };
 enum class StopReason {
   kNone,          ///< moving (not a stop)
   kNotLocalized,  ///< initial localisation has not succeeded yet
   kFeaturesLost,  ///< no usable feature for longer than the hold time
   kTourComplete,  ///< the final image was reached
+  kSegmentOverdue,  ///< no key-image switch for far longer than teaching took: unsure, stopped
 };
 
 const char* to_string(NavState s);
