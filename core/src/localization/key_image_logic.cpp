@@ -228,6 +228,15 @@ std::optional<double> median_ratio(std::vector<double>& ratios) {
   return *mid;
 }
 
+std::optional<double> quantile_ratio(std::vector<double>& ratios, double q) {
+  if (ratios.empty()) return std::nullopt;
+  if (q == 0.5) return median_ratio(ratios);
+  const double clamped = std::clamp(q, 0.0, 1.0);
+  const auto k = static_cast<std::ptrdiff_t>(clamped * static_cast<double>(ratios.size() - 1));
+  std::nth_element(ratios.begin(), ratios.begin() + k, ratios.end());
+  return ratios[static_cast<size_t>(k)];
+}
+
 std::optional<double> median_scale_ratio(std::span<const cv::Point2d> key_norm,
                                          std::span<const cv::Point2d> current_norm,
                                          double min_separation_norm) {

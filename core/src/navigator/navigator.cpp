@@ -80,6 +80,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
         static_cast<double>(segment_overdue_min_ns), ">= 0");
+  check(scale_quantile > 0.0 && scale_quantile < 1.0, "scale_quantile", scale_quantile,
+        "in (0, 1)");
   check(min_scale_lines >= 0, "min_scale_lines", min_scale_lines, ">= 0");
   check(min_scale_pairs >= 1, "min_scale_pairs", min_scale_pairs, ">= 1");
   check(scale_line_max_angle_rad > 0.0 && scale_line_max_angle_rad <= 0.5,
@@ -223,7 +225,7 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
   std::vector<double> ratios;
   if (n_points >= options_.min_scale_points) {
     localization::append_point_scale_ratios(s.key, s.current, kMinSeparationNorm, ratios);
-    return localization::median_ratio(ratios);
+    return localization::quantile_ratio(ratios, options_.scale_quantile);
   }
   if (options_.min_scale_lines == 0 || m.n_lines() < options_.min_scale_lines) {
     return std::nullopt;
@@ -238,7 +240,7 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
   localization::append_line_scale_ratios(lines, options_.scale_line_max_angle_rad,
                                          kMinSeparationNorm, ratios);
   if (static_cast<int>(ratios.size()) < options_.min_scale_pairs) return std::nullopt;
-  return localization::median_ratio(ratios);
+  return localization::quantile_ratio(ratios, options_.scale_quantile);
 }
 
 bool Navigator::segment_overdue(int64_t t_ns) const {

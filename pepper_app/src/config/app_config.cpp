@@ -160,6 +160,7 @@ template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v("min_point_texture", o.min_point_texture);
   v("arrival_scale_ratio", o.arrival_scale_ratio);
   v("min_scale_points", o.min_scale_points);
+  v("scale_quantile", o.scale_quantile);
   v("min_scale_lines", o.min_scale_lines);
   v("min_scale_pairs", o.min_scale_pairs);
   v("scale_line_max_angle_rad", o.scale_line_max_angle_rad);

@@ -158,5 +158,7 @@ void append_line_scale_ratios(std::span<const LineCorrespondence> lines, double 
 
 /// Median of `ratios` (reordered), nullopt when empty.
 std::optional<double> median_ratio(std::vector<double>& ratios);
+/// The q-quantile (0 <= q <= 1, lower element) of `ratios` (reordered), nullopt when empty.
+std::optional<double> quantile_ratio(std::vector<double>& ratios, double q);
 
 }  // namespace pepper::core::localization

@@ -76,6 +76,9 @@ struct NavigatorOptions {
   /// at least this many verified point matches (fewer: unknown). Measured: with ~15 matches far
   /// from IN the ratio read 1.1..1.2 and fired "passed IN" spuriously. >= 3.
   int min_scale_points = 20;
+  /// Which quantile of the pairwise ratios is "the" apparent scale (0.5: the median). Pairs of
+  /// far features change little as the robot moves, near ones a lot. In (0, 1).
+  double scale_quantile = 0.5;
   /// With fewer points than min_scale_points the ratio comes from the matched lines alone
   /// (pairs nearly parallel in both views, key_image_logic.hpp append_line_scale_ratios) when
   /// there are at least min_scale_lines of them and at least min_scale_pairs ratios; 0: points
@@ -94,10 +97,12 @@ struct NavigatorOptions {
   /// frame time. Why: with too few features to switch or to see arrival (measured: the end of
   /// worlds/white_corridor.yaml before it got an end door) the robot drove on with the last
   /// segment's command, towards the wall 5 m further, until the evaluation cut it off.
-  /// Replay runs at 0.15 m/s, slower than most teach drives; factor 4 leaves room for that and
-  /// for a slow start from a perturbed pose. factor 0: off. factor >= 0, min_ns >= 0.
-  double segment_overdue_factor = 4.0;
-  int64_t segment_overdue_min_ns = 10'000'000'000;
+  /// Replay runs at 0.15 m/s, slower than most teach drives (0.25 m/s in the shipped worlds),
+  /// and switches come early or late by up to a metre, so one replayed segment took up to 4x
+  /// its taught time and 9.7 s (white_corridor); 10 s / 4x stopped good runs there. 20 s / 6x
+  /// leaves twice that margin (3 m at replay speed). factor 0: off. factor >= 0, min_ns >= 0.
+  double segment_overdue_factor = 6.0;
+  int64_t segment_overdue_min_ns = 20'000'000'000;
   std::vector<std::string> validate() const;
 };
 
