@@ -190,6 +190,7 @@ void Navigator::reset() {
   last_t_ns_.reset();
   vnhv_segment_next_ = -1;
   vnhv_prev_in_next_.reset();
+  klt_priors_.clear();
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -199,6 +200,17 @@ void Navigator::ensure_pyramids(const localization::Segment& seg) {
     const bool wanted = i >= seg.prev && i <= last;
     if (wanted && f.klt_pyramid.empty()) features::build_klt_pyramid(f, options_.matcher.klt);
     if (!wanted && !f.klt_pyramid.empty()) features::release_klt_pyramid(f);
+  }
+}
+
+void Navigator::remember_tracks(const features::FrameMatcher& fm) {
+  klt_priors_.clear();
+  if (!switcher_) return;
+  const localization::Segment& seg = switcher_->segment();
+  for (const int i : {seg.prev, seg.next, seg.next_next.value_or(-1)}) {
+    if (const features::TwoViewMatches* m = i >= 0 ? fm.computed_two_view(i) : nullptr) {
+      klt_priors_[i] = m->points;
+    }
   }
 }
 
@@ -335,6 +347,8 @@ StepResult Navigator::step(const Frame& frame) {
   unsigned parts = features::kPartsCurrentFrame;
   if (need_localization) parts |= features::kPartWideBaseline;
   features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher);
+  for (auto& [i, points] : klt_priors_) fm.set_klt_prior(i, std::move(points));
+  klt_priors_.clear();
   tel.timings.extract_ms = ms_since(t0);
 
   if (need_localization) {
@@ -446,12 +460,14 @@ StepResult Navigator::step(const Frame& frame) {
     vnhv_segment_next_ = -1;
   }
   tel.timings.control_ms = ms_since(t0);
+  remember_tracks(fm);
   Command final_cmd = cmd;
   out.command = final_cmd;
   finish(final_cmd);
   if (state_ == NavState::kLost) {
     // Keep the last segment in telemetry for this frame, then forget it (relocalise next).
     switcher_.reset();
+    klt_priors_.clear();
   }
   return out;
 }
