@@ -1,17 +1,28 @@
 // Navigator hot paths on synthetic VGA frames (tests/core/navigator/test_world.hpp: a textured
 // box room rendered by ray casting), single-threaded.
 //   BM_NavigatorStep       one Navigator::step on VGA while navigating (feature extraction,
-//                          3 two-view + 2 three-view verifications, control), key images every
-//                          ~0.3 m on a straight run.
+//                          two-view matching with IN and INN, and when the switching rules need
+//                          them n(IP, Ia) and the two three-view counts; control), key images
+//                          every ~0.3 m on a straight run replayed on the taught frames.
+//   BM_NavigatorStepTour   the same on the shared test tour (2.5 m, 60 deg left turn of 0.8 m
+//                          radius, 1.5 m) taught offline at VGA, replayed 5 cm to the left with
+//                          1.7 deg of heading offset: the turn, where key images are far apart
+//                          in yaw, is the expensive part.
 //   BM_InitialLocalization localisation of one VGA frame (ORB extraction + prefilter vote over
 //                          all key images + geometric verification of the best) in a
 //                          150-key-image map laid along a 24 m loop of the room.
 //   BM_PrefilterVote       the vote alone over the 150 key images.
+// Counters: mean wall-clock split of a step from the telemetry (extract_ms, match_ms,
+// control_ms), the fraction of steps that computed n(IP, Ia) (prev_frac) and the three-view
+// counts (three_view_frac), and the median / 90th percentile / maximum of the per-step CPU time
+// of the thread (cpu_p50_ms, cpu_p90_ms, cpu_max_ms; one-core figures even on a shared machine).
 // Run (numbers in docs/method/navigator.md):
-//   taskset -c 0 build-nav/bench/bench_navigator --benchmark_repetitions=5
+//   taskset -c 0 build/bench/bench_navigator --benchmark_repetitions=5
 //       --benchmark_report_aggregates_only=true   (one command line)
 // The program calls cv::setNumThreads(1) itself.
 #include <benchmark/benchmark.h>
+
+#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +31,7 @@
 
 #include "../../tests/core/navigator/test_world.hpp"
 #include "core/localization/initial_localizer.hpp"
+#include "core/mapping/teacher.hpp"
 #include "core/navigator/navigator.hpp"
 
 namespace {
@@ -63,35 +75,94 @@ const StraightRun& straight_run() {
   return run;
 }
 
-void BM_NavigatorStep(benchmark::State& state) {
-  const StraightRun& run = straight_run();
-  const size_t first = 3, last = run.frames.size() - 10;
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+// Steps the navigator over frames[first, last) once per iteration, restarting (not timed) with
+// a fresh navigator localised on frames[first - 1] when the range is exhausted.
+void step_frames(benchmark::State& state, const core::memory::VisualMemory& map,
+                 const std::vector<core::Frame>& frames, size_t first, size_t last) {
   std::optional<core::navigator::Navigator> nav;
   size_t i = last;
   double extract_ms = 0, match_ms = 0, control_ms = 0;
-  int n = 0;
+  int n = 0, n_prev = 0, n_three_view = 0;
+  std::vector<double> cpu_ms;
   for (auto _ : state) {
-    if (i >= last) {  // restart the run (not timed): fresh navigator, localised on one frame
+    if (i >= last) {
       state.PauseTiming();
-      nav.emplace(run.map);
-      nav->step(run.frames[first - 1]);
+      nav.emplace(map);
+      nav->step(frames[first - 1]);
       i = first;
       state.ResumeTiming();
     }
-    const auto r = nav->step(run.frames[i++]);
+    const double cpu0_ms = thread_cpu_ms();
+    const auto r = nav->step(frames[i++]);
+    cpu_ms.push_back(thread_cpu_ms() - cpu0_ms);
     benchmark::DoNotOptimize(r.command.omega_rad_s);
     extract_ms += r.telemetry.timings.extract_ms;
     match_ms += r.telemetry.timings.match_ms;
     control_ms += r.telemetry.timings.control_ms;
+    n_prev += r.telemetry.n_prev >= 0;
+    n_three_view += r.telemetry.n_three_view_next >= 0;
     ++n;
     if (r.command.stop) state.SkipWithError("navigator stopped during the benchmark run");
   }
   // Mean wall-clock split from telemetry (includes waiting when the core is shared).
-  state.counters["extract_ms"] = extract_ms / std::max(1, n);
-  state.counters["match_ms"] = match_ms / std::max(1, n);
-  state.counters["control_ms"] = control_ms / std::max(1, n);
+  const double d = std::max(1, n);
+  state.counters["extract_ms"] = extract_ms / d;
+  state.counters["match_ms"] = match_ms / d;
+  state.counters["control_ms"] = control_ms / d;
+  state.counters["prev_frac"] = n_prev / d;
+  state.counters["three_view_frac"] = n_three_view / d;
+  // Per-step CPU time of this thread (the one-core figure even on a shared machine).
+  std::sort(cpu_ms.begin(), cpu_ms.end());
+  if (!cpu_ms.empty()) {
+    state.counters["cpu_p50_ms"] = cpu_ms[cpu_ms.size() / 2];
+    state.counters["cpu_p90_ms"] = cpu_ms[cpu_ms.size() * 9 / 10];
+    state.counters["cpu_max_ms"] = cpu_ms.back();
+  }
+}
+
+void BM_NavigatorStep(benchmark::State& state) {
+  const StraightRun& run = straight_run();
+  step_frames(state, run.map, run.frames, 3, run.frames.size() - 10);
 }
 BENCHMARK(BM_NavigatorStep)->Unit(benchmark::kMillisecond)->Iterations(60);
+
+struct Tour {
+  std::vector<core::Frame> frames;  // replay
+  core::memory::VisualMemory map;
+};
+const Tour& tour() {
+  static const Tour t = [] {
+    const test::BoxWorld& world = test::shared_world();
+    const auto path = test::straight_turn_straight(-3.0, -2.0, 2.5, 1.0472, 0.8, 1.5, 0.045);
+    core::mapping::TeachOptions teach;
+    // As the shared test tour: key images ~0.5 m apart, denser in the turn.
+    teach.selector.epsilon = 120;
+    Tour r;
+    r.map = core::mapping::teach_offline(test::render_frames(world, path, vga()), vga(), teach);
+    std::vector<test::Pose2d> replay = path;
+    for (auto& p : replay) {
+      p.x_m -= 0.05 * std::sin(p.yaw_rad);
+      p.y_m += 0.05 * std::cos(p.yaw_rad);
+      p.yaw_rad += 0.03;
+    }
+    r.frames = test::render_frames(world, replay, vga());
+    return r;
+  }();
+  return t;
+}
+
+void BM_NavigatorStepTour(benchmark::State& state) {
+  const Tour& t = tour();
+  // 108 frames; the last ones are skipped (the tour ends there, stop commands cost nothing).
+  step_frames(state, t.map, t.frames, 3, t.frames.size() - 6);
+}
+BENCHMARK(BM_NavigatorStepTour)->Unit(benchmark::kMillisecond)->Iterations(99);
 
 // Pose at key index i (may be fractional) of 150 along a rounded-square loop (half side 2.4 m,
 // corner radius 1.0 m, perimeter ~21.8 m), counter-clockwise; `left_m` shifts it sideways.

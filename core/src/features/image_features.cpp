@@ -123,6 +123,11 @@ std::vector<std::string> KltOptions::validate() const {
   check_range(e, "klt.epsilon", epsilon, 1e-6, 10.0);
   check_range(e, "klt.min_eig_threshold", min_eig_threshold, 0.0, 1.0);
   check_range(e, "klt.max_error", max_error, 0.0f, 255.0f);
+  check_range(e, "klt.prior_max_level", prior_max_level, -1, 6);
+  check_range(e, "klt.prior_probes", prior_probes, 0, 1000);
+  check_range(e, "klt.prior_window_px", prior_window_px, 5, 101);
+  if (prior_window_px % 2 == 0)
+    e.push_back("klt.prior_window_px = " + std::to_string(prior_window_px) + " must be odd");
   return e;
 }
 
@@ -152,13 +157,13 @@ std::vector<cv::Point2d> ImageFeatures::corners_norm() const {
   return out;
 }
 
-void build_klt_pyramid(ImageFeatures& f, const KltOptions& options) {
+void build_klt_pyramid(ImageFeatures& f, const KltOptions& options, bool with_derivatives) {
   if (f.gray.empty()) throw std::invalid_argument("build_klt_pyramid: the features hold no image");
   const auto errors = options.validate();
   if (!errors.empty()) throw std::invalid_argument("build_klt_pyramid: " + join(errors));
   f.klt_pyramid.clear();
   cv::buildOpticalFlowPyramid(f.gray, f.klt_pyramid, cv::Size(options.window_px, options.window_px),
-                              options.max_level, true);
+                              options.max_level, with_derivatives);
   f.klt_pyramid_options = options;
 }
 
@@ -211,7 +216,8 @@ ImageFeatures FeatureExtractor::extract(const cv::Mat& gray, unsigned parts) con
     auto orb = cv::ORB::create(options_.orb_max_features);
     orb->detectAndCompute(gray, cv::noArray(), f.keypoints, f.keypoint_descriptors);
   }
-  if (parts & kPartPyramid) build_klt_pyramid(f, options_.klt);
+  // Scharr derivatives only for images tracked from (they have corners).
+  if (parts & kPartPyramid) build_klt_pyramid(f, options_.klt, (parts & kPartCorners) != 0);
   return f;
 }
 

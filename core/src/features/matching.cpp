@@ -8,6 +8,11 @@
 #include <sstream>
 #include <stdexcept>
 
+// The core runs single-threaded (ARCHITECTURE.md): no OpenMP inside Eigen products.
+#ifndef EIGEN_DONT_PARALLELIZE
+#define EIGEN_DONT_PARALLELIZE
+#endif
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -64,12 +69,20 @@ bool epipolar_overlap_ok(const LineSegment& a, const LineSegment& b, const cv::M
   return hi >= -margin && lo <= len_b + margin;
 }
 
-// Mutual best + ratio on unit-norm float descriptors via one distance matrix.
-std::vector<LineMatch> descriptor_matches(const cv::Mat& da, const cv::Mat& db, const LineMatchOptions& o) {
+// Mutual best + ratio on unit-norm float descriptors via one similarity matrix. The product is
+// Eigen's (vectorised): cv::gemm goes through the reference BLAS here (5x the instructions of
+// this function on the navigator benchmark, callgrind).
+std::vector<LineMatch> descriptor_matches(const cv::Mat& da, const cv::Mat& db,
+                                          const LineMatchOptions& o) {
   std::vector<LineMatch> out;
   if (da.empty() || db.empty()) return out;
-  cv::Mat dot;
-  cv::gemm(da, db, 1.0, cv::noArray(), 0.0, dot, cv::GEMM_2_T);  // na x nb, cos similarity
+  using RowMajorF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const cv::Mat ca = da.isContinuous() ? da : da.clone(), cb = db.isContinuous() ? db : db.clone();
+  const Eigen::Map<const RowMajorF> ea(ca.ptr<float>(), ca.rows, ca.cols);
+  const Eigen::Map<const RowMajorF> eb(cb.ptr<float>(), cb.rows, cb.cols);
+  RowMajorF sim = ea * eb.transpose();  // na x nb, cos similarity
+  const cv::Mat dot(static_cast<int>(sim.rows()), static_cast<int>(sim.cols()), CV_32F,
+                    sim.data());
   const int na = dot.rows, nb = dot.cols;
   std::vector<int> best_a_for_b(static_cast<size_t>(nb), -1);
   std::vector<float> best_dot_b(static_cast<size_t>(nb), -std::numeric_limits<float>::infinity());
@@ -106,32 +119,38 @@ std::vector<LineMatch> descriptor_matches(const cv::Mat& da, const cv::Mat& db, 
   return out;
 }
 
-// `shift_px`: a guess of the image motion a -> b for every corner (KLT starts there; OpenCV's
-// OPTFLOW_USE_INITIAL_FLOW), or zero.
-void klt_track(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
-               const cv::Point2f& shift_px, std::vector<cv::Point2f>& b_pts,
-               std::vector<uchar>& status) {
-  std::vector<float> err;
-  int flags = 0;
-  if (shift_px != cv::Point2f(0.0f, 0.0f)) {
-    b_pts.resize(a.corners_px.size());
-    for (size_t i = 0; i < b_pts.size(); ++i) b_pts[i] = a.corners_px[i] + shift_px;
-    flags = cv::OPTFLOW_USE_INITIAL_FLOW;
-  }
-  const bool a_pyr = !a.klt_pyramid.empty() && a.klt_pyramid_options.window_px == k.window_px &&
-                     a.klt_pyramid_options.max_level >= k.max_level;
-  const bool b_pyr = !b.klt_pyramid.empty() && b.klt_pyramid_options.window_px == k.window_px &&
-                     b.klt_pyramid_options.max_level >= k.max_level;
-  cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, k.max_iterations, k.epsilon);
+// Tracks of a's corners into b (one entry per corner).
+struct Tracks {
+  std::vector<cv::Point2f> b_px;
+  std::vector<uchar> ok;     ///< tracked, patch error within max_error, inside b
+  std::vector<float> error;  ///< KLT mean patch error (grey levels) of the tracks that are ok
+};
+
+// One pyramidal LK call from a's image into b's with a window of window_px (<= k.window_px), using
+// their pyramids when they were built for k. With `use_initial`, b_pts holds the starting
+// positions (OPTFLOW_USE_INITIAL_FLOW). Rejects tracks with a large patch error or ending
+// outside b.
+void run_lk(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k, int window_px,
+            int max_level, bool use_initial, const std::vector<cv::Point2f>& a_pts,
+            std::vector<cv::Point2f>& b_pts, std::vector<uchar>& status, std::vector<float>& err) {
+  auto usable = [&](const ImageFeatures& f) {
+    return !f.klt_pyramid.empty() && f.klt_pyramid_options.window_px == k.window_px &&
+           f.klt_pyramid_options.max_level >= k.max_level;
+  };
+  const bool a_pyr = usable(a), b_pyr = usable(b);
+  const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, k.max_iterations,
+                              k.epsilon);
+  const int flags = use_initial ? cv::OPTFLOW_USE_INITIAL_FLOW : 0;
+  const cv::Size win(window_px, window_px);
   if (a_pyr && b_pyr) {
-    cv::calcOpticalFlowPyrLK(a.klt_pyramid, b.klt_pyramid, a.corners_px, b_pts, status, err,
-                             cv::Size(k.window_px, k.window_px), k.max_level, crit, flags, k.min_eig_threshold);
+    cv::calcOpticalFlowPyrLK(a.klt_pyramid, b.klt_pyramid, a_pts, b_pts, status, err, win,
+                             max_level, crit, flags, k.min_eig_threshold);
   } else if (b_pyr) {
-    cv::calcOpticalFlowPyrLK(a.gray, b.klt_pyramid, a.corners_px, b_pts, status, err,
-                             cv::Size(k.window_px, k.window_px), k.max_level, crit, flags, k.min_eig_threshold);
+    cv::calcOpticalFlowPyrLK(a.gray, b.klt_pyramid, a_pts, b_pts, status, err, win, max_level, crit,
+                             flags, k.min_eig_threshold);
   } else {
-    cv::calcOpticalFlowPyrLK(a.gray, b.gray, a.corners_px, b_pts, status, err,
-                             cv::Size(k.window_px, k.window_px), k.max_level, crit, flags, k.min_eig_threshold);
+    cv::calcOpticalFlowPyrLK(a.gray, b.gray, a_pts, b_pts, status, err, win, max_level, crit, flags,
+                             k.min_eig_threshold);
   }
   const float w = static_cast<float>(b.image_size.width), h = static_cast<float>(b.image_size.height);
   for (size_t i = 0; i < status.size(); ++i) {
@@ -141,27 +160,138 @@ void klt_track(const ImageFeatures& a, const ImageFeatures& b, const KltOptions&
   }
 }
 
+// Tracks all of a's corners into b. Corners with a prior position start there, shifted by the
+// image motion since the prior's frame, with k.prior_max_level levels and the k.prior_window_px
+// window: that motion is the median displacement of k.prior_probes of them first tracked with
+// all levels (a turn moves the whole image by tens of pixels per frame; what is left after the
+// shift is a few pixels). The corners without prior, and prior tracks that fail, are tracked
+// with k.max_level from their position in a moved by `shift_px` (a guess of the image motion
+// a -> b, or zero).
+Tracks klt_track(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
+                 const cv::Point2f& shift_px, std::span<const PointMatch> prior) {
+  const size_t n = a.corners_px.size();
+  Tracks t;
+  t.b_px.assign(n, cv::Point2f());
+  t.ok.assign(n, 0);
+  t.error.assign(n, 0.0f);
+  std::vector<int> idx;
+  std::vector<cv::Point2f> a_sub, b_sub;
+  std::vector<uchar> st_sub;
+  std::vector<float> err_sub;
+  auto take = [&] {
+    for (size_t j = 0; j < idx.size(); ++j) {
+      if (!st_sub[j]) continue;
+      const auto i = static_cast<size_t>(idx[j]);
+      t.ok[i] = 1;
+      t.b_px[i] = b_sub[j];
+      t.error[i] = err_sub[j];
+    }
+  };
+  if (k.prior_max_level >= 0 && !prior.empty()) {
+    std::vector<uchar> has_prior(n, 0);
+    std::vector<int> p_idx;
+    std::vector<cv::Point2f> p_b;
+    for (const PointMatch& m : prior) {
+      const auto i = static_cast<size_t>(m.idx_a);
+      if (m.idx_a < 0 || i >= n || has_prior[i]) continue;
+      has_prior[i] = 1;
+      p_idx.push_back(m.idx_a);
+      p_b.push_back(m.b_px);
+    }
+    const int levels = std::min(k.prior_max_level, k.max_level);
+    cv::Point2f shift(0.0f, 0.0f);
+    const size_t probes =
+        levels < k.max_level ? std::min(static_cast<size_t>(k.prior_probes), p_idx.size()) : 0;
+    std::vector<uchar> is_probe(p_idx.size(), 0);
+    if (probes > 0) {
+      for (size_t s = 0; s < probes; ++s) {  // spread over the prior list
+        const size_t j = s * p_idx.size() / probes;
+        is_probe[j] = 1;
+        idx.push_back(p_idx[j]);
+        a_sub.push_back(a.corners_px[static_cast<size_t>(p_idx[j])]);
+        b_sub.push_back(p_b[j]);
+      }
+      const std::vector<cv::Point2f> start = b_sub;
+      run_lk(a, b, k, k.window_px, k.max_level, true, a_sub, b_sub, st_sub, err_sub);
+      take();
+      std::vector<float> dx, dy;
+      for (size_t j = 0; j < idx.size(); ++j) {
+        if (!st_sub[j]) continue;
+        dx.push_back(b_sub[j].x - start[j].x);
+        dy.push_back(b_sub[j].y - start[j].y);
+      }
+      if (!dx.empty()) {
+        const auto mid = static_cast<std::ptrdiff_t>(dx.size() / 2);
+        std::nth_element(dx.begin(), dx.begin() + mid, dx.end());
+        std::nth_element(dy.begin(), dy.begin() + mid, dy.end());
+        shift = cv::Point2f(dx[static_cast<size_t>(mid)], dy[static_cast<size_t>(mid)]);
+      }
+    }
+    idx.clear();
+    a_sub.clear();
+    b_sub.clear();
+    for (size_t j = 0; j < p_idx.size(); ++j) {
+      if (is_probe[j]) continue;
+      idx.push_back(p_idx[j]);
+      a_sub.push_back(a.corners_px[static_cast<size_t>(p_idx[j])]);
+      b_sub.push_back(p_b[j] + shift);
+    }
+    if (!idx.empty()) {
+      run_lk(a, b, k, std::min(k.prior_window_px, k.window_px), levels, true, a_sub, b_sub, st_sub,
+             err_sub);
+      take();
+    }
+  }
+  idx.clear();
+  a_sub.clear();
+  b_sub.clear();
+  const bool shifted = shift_px != cv::Point2f(0.0f, 0.0f);
+  for (size_t i = 0; i < n; ++i) {
+    if (t.ok[i]) continue;
+    idx.push_back(static_cast<int>(i));
+    a_sub.push_back(a.corners_px[i]);
+    if (shifted) b_sub.push_back(a.corners_px[i] + shift_px);
+  }
+  if (!idx.empty()) {
+    run_lk(a, b, k, k.window_px, k.max_level, shifted, a_sub, b_sub, st_sub, err_sub);
+    take();
+  }
+  return t;
+}
+
 void check_image(const ImageFeatures& f, const char* who) {
   if (f.gray.empty() || f.image_size.width <= 0) {
     throw std::invalid_argument(std::string(who) + ": features without image (gray is empty)");
   }
 }
 
+// `cost[i]`: how doubtful candidate i is (KLT patch error, ORB distance): the essential RANSAC
+// (PROSAC) draws its samples from the best candidates first. The verified points keep the
+// candidates' order.
 void verify_points(const ImageFeatures& b, std::vector<PointMatch> cands,
-                   const MatcherOptions& o, TwoViewMatches& r) {
+                   const std::vector<float>& cost, const MatcherOptions& o, TwoViewMatches& r) {
   r.point_candidates = static_cast<int>(cands.size());
+  std::vector<int> order(cands.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(), [&](int x, int y) {
+    return cost[static_cast<size_t>(x)] < cost[static_cast<size_t>(y)];
+  });
   std::vector<cv::Point2d> an, bn;
   an.reserve(cands.size());
   bn.reserve(cands.size());
-  for (const auto& m : cands) {
-    an.push_back(m.a_norm);
-    bn.push_back(m.b_norm);
+  for (const int i : order) {
+    an.push_back(cands[static_cast<size_t>(i)].a_norm);
+    bn.push_back(cands[static_cast<size_t>(i)].b_norm);
   }
-  const auto ess = geometry::verify_essential(an, bn, focal_of(b), o.essential);
+  const auto ess = geometry::verify_essential(an, bn, focal_of(b), o.essential, true);
   r.essential_found = ess.found;
   r.E_b_a = ess.E_b_a;
-  r.points.reserve(ess.inliers.size());
-  for (int i : ess.inliers) r.points.push_back(cands[static_cast<size_t>(i)]);
+  std::vector<int> kept;
+  kept.reserve(ess.inliers.size());
+  for (const int i : ess.inliers) kept.push_back(order[static_cast<size_t>(i)]);
+  std::sort(kept.begin(), kept.end());
+  r.points.reserve(kept.size());
+  for (const int i : kept) r.points.push_back(cands[static_cast<size_t>(i)]);
 }
 
 // Descriptor matches (mutual + ratio) that pass the orientation checks; sets line_candidates.
@@ -291,32 +421,33 @@ std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& 
 
 namespace {
 
-// KLT of a's corners into b (starting at corner + shift_px) and essential RANSAC, into r.
+// KLT of a's corners into b (klt_track) and essential RANSAC, into r.
 void track_and_verify_points(const ImageFeatures& a, const ImageFeatures& b,
                              const MatcherOptions& options, const cv::Point2f& shift_px,
-                             TwoViewMatches& r) {
-  std::vector<cv::Point2f> b_pts;
-  std::vector<uchar> status;
-  klt_track(a, b, options.klt, shift_px, b_pts, status);
+                             std::span<const PointMatch> prior, TwoViewMatches& r) {
+  const Tracks t = klt_track(a, b, options.klt, shift_px, prior);
   std::vector<PointMatch> cands;
-  cands.reserve(status.size());
-  for (size_t i = 0; i < status.size(); ++i) {
-    if (!status[i]) continue;
+  std::vector<float> cost;  // KLT patch error
+  cands.reserve(t.ok.size());
+  cost.reserve(t.ok.size());
+  for (size_t i = 0; i < t.ok.size(); ++i) {
+    if (!t.ok[i]) continue;
     PointMatch m;
     m.idx_a = static_cast<int>(i);
     m.a_px = a.corners_px[i];
-    m.b_px = b_pts[i];
+    m.b_px = t.b_px[i];
     m.a_norm = a.intrinsics.normalize(cv::Point2d(m.a_px));
     m.b_norm = b.intrinsics.normalize(cv::Point2d(m.b_px));
     cands.push_back(m);
+    cost.push_back(t.error[i]);
   }
-  verify_points(b, std::move(cands), options, r);
+  verify_points(b, std::move(cands), cost, options, r);
 }
 
 }  // namespace
 
 TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
-                              const MatcherOptions& options) {
+                              const MatcherOptions& options, std::span<const PointMatch> prior) {
   const auto errors = options.validate();
   if (!errors.empty()) throw std::invalid_argument("match_two_view: " + join(errors));
   check_image(a, "match_two_view (a)");
@@ -331,7 +462,7 @@ TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
     const cv::Point2f shift = options.klt_shift_from_lines
                                   ? shift_from_lines(a, b, line_cands, options.klt)
                                   : cv::Point2f(0.0f, 0.0f);
-    track_and_verify_points(a, b, options, shift, r);
+    track_and_verify_points(a, b, options, shift, prior, r);
   }
   verify_lines(a, b, options, line_cands, r);
   return r;
@@ -343,6 +474,7 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
   if (!errors.empty()) throw std::invalid_argument("match_wide_baseline: " + join(errors));
   TwoViewMatches r;
   std::vector<PointMatch> cands;
+  std::vector<float> cost;  // Hamming distance of the match
   if (!a.keypoint_descriptors.empty() && !b.keypoint_descriptors.empty()) {
     const cv::Mat& da = a.keypoint_descriptors;
     const cv::Mat& db = b.keypoint_descriptors;
@@ -383,9 +515,10 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
       m.a_norm = a.intrinsics.normalize(cv::Point2d(m.a_px));
       m.b_norm = b.intrinsics.normalize(cv::Point2d(m.b_px));
       cands.push_back(m);
+      cost.push_back(static_cast<float>(d1));
     }
   }
-  verify_points(b, std::move(cands), options, r);
+  verify_points(b, std::move(cands), cost, options, r);
   verify_lines(a, b, options, r);
   return r;
 }
@@ -470,13 +603,25 @@ FrameMatcher::FrameMatcher(ImageFeatures current, const MatcherOptions& options)
   const bool ok = !current_.klt_pyramid.empty() &&
                   current_.klt_pyramid_options.window_px == options_.klt.window_px &&
                   current_.klt_pyramid_options.max_level >= options_.klt.max_level;
-  if (!ok) build_klt_pyramid(current_, options_.klt);
+  if (!ok) build_klt_pyramid(current_, options_.klt, false);  // only tracked into: no derivatives
+}
+
+void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior) {
+  klt_priors_[key_id] = std::move(prior);
 }
 
 const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures& key) {
   auto it = two_view_.find(key_id);
   if (it != two_view_.end()) return it->second;
-  return two_view_.emplace(key_id, match_two_view(key, current_, options_)).first->second;
+  const auto prior = klt_priors_.find(key_id);
+  std::span<const PointMatch> p;
+  if (prior != klt_priors_.end()) p = prior->second;
+  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p)).first->second;
+}
+
+const TwoViewMatches* FrameMatcher::computed_two_view(int64_t key_id) const {
+  const auto it = two_view_.find(key_id);
+  return it == two_view_.end() ? nullptr : &it->second;
 }
 
 const ThreeViewMatches& FrameMatcher::three_view(int64_t x_id, const ImageFeatures& x, int64_t y_id,

@@ -115,7 +115,7 @@ std::vector<std::string> EssentialRansacOptions::validate() const {
 
 EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
                                  const std::vector<cv::Point2d>& b_norm, double focal_px,
-                                 const EssentialRansacOptions& options) {
+                                 const EssentialRansacOptions& options, bool ranked) {
   if (a_norm.size() != b_norm.size()) {
     throw std::invalid_argument("verify_essential: " + std::to_string(a_norm.size()) + " points in a, " +
                                 std::to_string(b_norm.size()) + " in b");
@@ -129,12 +129,19 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
   if (n < std::max(5, options.min_inliers)) return r;
   cv::Mat mask;
   cv::Mat E;
-  try {
-    E = cv::findEssentialMat(a_norm, b_norm, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC,
-                             options.confidence, options.threshold_px / focal_px,
-                             options.max_iterations, mask);
-  } catch (const cv::Exception&) {
-    return r;  // degenerate configuration (e.g. all points identical): no model
+  // PROSAC draws samples from the best-ranked matches first. With (near) zero baseline its
+  // cheirality test rejects every sample and it returns no model; plain RANSAC then decides.
+  std::vector<int> methods{cv::RANSAC};
+  if (ranked) methods.insert(methods.begin(), cv::USAC_PROSAC);
+  for (const int method : methods) {
+    try {
+      E = cv::findEssentialMat(a_norm, b_norm, cv::Mat::eye(3, 3, CV_64F), method,
+                               options.confidence, options.threshold_px / focal_px,
+                               options.max_iterations, mask);
+    } catch (const cv::Exception&) {
+      E.release();  // degenerate configuration (e.g. all points identical): no model
+    }
+    if (!E.empty()) break;
   }
   if (E.empty() || E.rows < 3 || mask.empty()) return r;
   // Local optimisation: OpenCV keeps the best minimal-sample model; refit linearly on its inliers

@@ -204,6 +204,7 @@ void Navigator::reset() {
   vnhv_segment_next_ = -1;
   vnhv_prev_in_next_.reset();
   segment_start_t_ns_.reset();
+  klt_priors_.clear();
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -251,6 +252,17 @@ bool Navigator::segment_overdue(int64_t t_ns) const {
   const double allowed_ns = std::max(static_cast<double>(options_.segment_overdue_min_ns),
                                      options_.segment_overdue_factor * taught_ns);
   return static_cast<double>(t_ns - *segment_start_t_ns_) > allowed_ns;
+}
+
+void Navigator::remember_tracks(const features::FrameMatcher& fm) {
+  klt_priors_.clear();
+  if (!switcher_) return;
+  const localization::Segment& seg = switcher_->segment();
+  for (const int i : {seg.prev, seg.next, seg.next_next.value_or(-1)}) {
+    if (const features::TwoViewMatches* m = i >= 0 ? fm.computed_two_view(i) : nullptr) {
+      klt_priors_[i] = m->points;
+    }
+  }
 }
 
 void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
@@ -387,6 +399,8 @@ StepResult Navigator::step(const Frame& frame) {
   unsigned parts = features::kPartsCurrentFrame;
   if (need_localization) parts |= features::kPartWideBaseline;
   features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher);
+  for (auto& [i, points] : klt_priors_) fm.set_klt_prior(i, std::move(points));
+  klt_priors_.clear();
   tel.timings.extract_ms = ms_since(t0);
 
   if (need_localization) {
@@ -504,12 +518,14 @@ StepResult Navigator::step(const Frame& frame) {
     vnhv_segment_next_ = -1;
   }
   tel.timings.control_ms = ms_since(t0);
+  remember_tracks(fm);
   Command final_cmd = cmd;
   out.command = final_cmd;
   finish(final_cmd);
   if (state_ == NavState::kLost) {
     // Keep the last segment in telemetry for this frame, then forget it (relocalise next).
     switcher_.reset();
+    klt_priors_.clear();
   }
   return out;
 }

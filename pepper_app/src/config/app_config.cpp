@@ -43,6 +43,9 @@ template <class V> void visit(V& v, cf::KltOptions& o) {
   v("epsilon", o.epsilon);
   v("min_eig_threshold", o.min_eig_threshold);
   v("max_error", o.max_error);
+  v("prior_max_level", o.prior_max_level);
+  v("prior_probes", o.prior_probes);
+  v("prior_window_px", o.prior_window_px);
 }
 template <class V> void visit(V& v, cf::FeatureExtractorOptions& o) {
   v("max_lines", o.max_lines);

@@ -1,7 +1,12 @@
 // Five-point essential RANSAC on synthetic planar-motion point pairs with outliers.
 #include "core/geometry/essential_ransac.hpp"
 
+#include <algorithm>
+#include <utility>
+#include <vector>
+
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "support/synthetic_scene.hpp"
 
@@ -37,6 +42,55 @@ TEST_P(EssentialSynthetic, RecoversInliersRejectsOutliers) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Outliers, EssentialSynthetic, ::testing::Values(0.3, 0.5));
+
+// Ranked input (PROSAC): the matches ordered by an imperfect quality score (outliers rank worse
+// on average, as KLT tracks with a large patch error do) meet the same targets.
+TEST_P(EssentialSynthetic, RankedInputMeetsTheSameTargets) {
+  const double outliers = GetParam();
+  const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
+  const PlanarPose key{0.0, 0.0, 0.0}, cur{0.08, 0.1, 0.5};
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    test::SceneOptions so;
+    so.outlier_fraction = outliers;
+    so.pixel_noise_px = 0.3;
+    test::SyntheticScene scene(k, so, seed);
+    const auto d = scene.points(key, cur);
+    cv::RNG rng(seed);
+    std::vector<std::pair<double, int>> quality;
+    for (size_t i = 0; i < d.a_norm.size(); ++i) {
+      quality.emplace_back(d.is_inlier[i] ? rng.uniform(0.0, 1.0) : rng.uniform(0.5, 1.5),
+                           static_cast<int>(i));
+    }
+    std::sort(quality.begin(), quality.end());
+    std::vector<cv::Point2d> a, b;
+    std::vector<bool> is_inlier;
+    for (const auto& [q, i] : quality) {
+      a.push_back(d.a_norm[static_cast<size_t>(i)]);
+      b.push_back(d.b_norm[static_cast<size_t>(i)]);
+      is_inlier.push_back(d.is_inlier[static_cast<size_t>(i)]);
+    }
+    const auto r = verify_essential(a, b, k.fx_px, {}, true);
+    ASSERT_TRUE(r.found);
+    const auto s = test::score(r.inliers, is_inlier);
+    EXPECT_GE(s.recall, 0.95) << "seed " << seed;
+    EXPECT_LE(s.contamination, 0.02) << "seed " << seed;
+  }
+}
+
+TEST(Essential, RankedWithoutBaselineFallsBackToRansac) {
+  // Zero baseline (the same points in both views): PROSAC's cheirality check rejects every
+  // sample; the result is plain RANSAC's.
+  const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
+  test::SceneOptions so;
+  so.outlier_fraction = 0.0;
+  so.pixel_noise_px = 0.0;
+  test::SyntheticScene scene(k, so, 3);
+  const auto d = scene.points(PlanarPose{0.0, 0.0, 0.0}, PlanarPose{0.08, 0.1, 0.5});
+  const auto plain = verify_essential(d.a_norm, d.a_norm, k.fx_px);
+  const auto ranked = verify_essential(d.a_norm, d.a_norm, k.fx_px, {}, true);
+  EXPECT_EQ(ranked.found, plain.found);
+  EXPECT_EQ(ranked.inliers, plain.inliers);
+}
 
 TEST(Essential, FewPointsIsNotFound) {
   std::vector<cv::Point2d> a(4, {0.1, 0.2}), b(4, {0.1, 0.2});

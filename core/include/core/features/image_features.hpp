@@ -15,7 +15,8 @@
 //    of ORB/AKAZE/SIFT (a few ms at VGA) and the views compared are taken facing roughly the same
 //    direction at similar scale, where ORB's weaker scale invariance costs little;
 //  - gray: the image (CV_8UC1) itself, needed to track corners from this image;
-//  - klt_pyramid: DERIVED data (cv::buildOpticalFlowPyramid of gray with derivatives), not
+//  - klt_pyramid: DERIVED data (cv::buildOpticalFlowPyramid of gray; extract() adds the
+//    derivatives when it computes corners, i.e. when the image will be tracked from), not
 //    serialised: rebuild with build_klt_pyramid() after loading. It is optional: tracking from an
 //    image without pyramid works, only slower.
 // Serialise: image_size, intrinsics, lines, line_descriptors, corners_px, keypoints,
@@ -48,6 +49,18 @@ struct KltOptions {
   double epsilon = 0.03;       ///< convergence threshold, px
   double min_eig_threshold = 1e-4;  ///< OpenCV minEigThreshold
   float max_error = 30.0f;     ///< reject tracks whose mean patch error exceeds this (grey levels)
+  /// Tracking from a prior position (the corner's verified position in the previous frame,
+  /// matching.hpp): all priors are first shifted by the image motion measured on `prior_probes`
+  /// of them tracked with max_level (0..1000; 0: no shift), then tracked with
+  /// `prior_max_level` levels (-1..6, capped at max_level; -1: priors are ignored) and a
+  /// `prior_window_px` window (odd, 5..101, capped at window_px). Tracking only: the pyramids
+  /// use the fields above.
+  /// Measured (docs/perception.md "Speed"): 1 level and an 11 px window track ~2x faster than
+  /// from scratch with as few wrong tracks on rendered images with ground truth; 0 levels is a
+  /// little faster but leaves wrong tracks where parallax exceeds the window.
+  int prior_max_level = 1;
+  int prior_probes = 16;
+  int prior_window_px = 11;
   std::vector<std::string> validate() const;
 };
 
@@ -62,7 +75,7 @@ struct ImageFeatures {
   cv::Mat gray;                        ///< CV_8UC1 image (shared buffer, treat as read-only)
 
   // ---- derived, not serialised ----
-  std::vector<cv::Mat> klt_pyramid;    ///< buildOpticalFlowPyramid(gray) with derivatives
+  std::vector<cv::Mat> klt_pyramid;    ///< buildOpticalFlowPyramid(gray), see build_klt_pyramid
   KltOptions klt_pyramid_options;      ///< the options the pyramid was built with
 
   /// Normalised coordinates of corners_px (computed, not stored).
@@ -70,8 +83,11 @@ struct ImageFeatures {
 };
 
 /// (Re)builds features.klt_pyramid from features.gray. Throws std::invalid_argument if gray is
-/// empty. Memory: about 5 bytes per pixel x 4/3 (image + Scharr derivatives per level).
-void build_klt_pyramid(ImageFeatures& features, const KltOptions& options = {});
+/// empty. Memory: about 5 bytes per pixel x 4/3 (image + Scharr derivatives per level), 1 byte
+/// per pixel x 4/3 without derivatives. The derivatives serve tracking *from* this image (its
+/// corners); an image only tracked into (the navigator's current frame) needs none.
+void build_klt_pyramid(ImageFeatures& features, const KltOptions& options = {},
+                       bool with_derivatives = true);
 
 /// Drops the derived pyramid (to save memory on key images far from the robot).
 void release_klt_pyramid(ImageFeatures& features);

@@ -29,6 +29,7 @@
 
 #include <cstdint>
 #include <string>
+#include <span>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -127,8 +128,13 @@ std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& 
 
 /// Two-view verified lines and points, KLT from a (key, needs corners_px) into b (current).
 /// b.klt_pyramid is used when built with the same KltOptions (else built on the fly).
+/// `prior`: verified point matches of a with an earlier frame close to b (typically the previous
+/// one; idx_a and b_px are used): those corners start from b_px with klt.prior_max_level levels
+/// instead of from their position in a with klt.max_level (faster), and fall back to the latter
+/// when that track fails. The result is a function of (a, b, options, prior).
 TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
-                              const MatcherOptions& options = {});
+                              const MatcherOptions& options = {},
+                              std::span<const PointMatch> prior = {});
 
 /// Wide-baseline verified lines and points (ORB keypoints of both views).
 TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& b,
@@ -148,15 +154,22 @@ ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches&
 /// the current frame's features, shared cv::Mat buffers).
 class FrameMatcher {
  public:
-  /// Builds the current frame's KLT pyramid if missing. Throws std::invalid_argument when the
-  /// options are invalid or `current` has no image.
+  /// Builds the current frame's KLT pyramid if missing (no derivatives: only tracked into).
+  /// Throws std::invalid_argument when the options are invalid or `current` has no image.
   explicit FrameMatcher(ImageFeatures current, const MatcherOptions& options = {});
 
   const ImageFeatures& current() const { return current_; }
   const MatcherOptions& options() const { return options_; }
 
+  /// KLT priors for a key image (see match_two_view): set before the first two_view() of that
+  /// key id (later calls have no effect on an already computed result).
+  void set_klt_prior(int64_t key_id, std::vector<PointMatch> prior);
+
   /// n(key, current): verified lines + KLT points (cached per key id).
   const TwoViewMatches& two_view(int64_t key_id, const ImageFeatures& key);
+
+  /// The cached two-view result of key_id, nullptr when two_view() was not called for it.
+  const TwoViewMatches* computed_two_view(int64_t key_id) const;
 
   /// nL, nP for (x, current, y): the three-view sets of the chain x -> current <- y (cached per
   /// ordered pair of ids: the result's idx_x/idx_y follow the argument order).
@@ -174,6 +187,7 @@ class FrameMatcher {
   ImageFeatures current_;
   MatcherOptions options_;
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
+  std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
   std::unordered_map<std::pair<int64_t, int64_t>, ThreeViewMatches, PairHash> three_view_;
 };

@@ -5,9 +5,12 @@
 //
 // Inputs: matched points in normalised coordinates of view a and view b (same length); the
 // threshold is given in pixels and converted with `focal_px` (threshold_norm = threshold_px /
-// focal_px). Output: inlier indices into the inputs, and E with x_b^T E x_a = 0.
-// Fewer than 5 (or `min_inliers`) matches, or no model: found = false, no inliers (a value,
-// not an exception). Deterministic: OpenCV's RANSAC uses a fixed-seed RNG.
+// focal_px). With `ranked`, the matches are ordered best first (e.g. by KLT patch error) and the
+// sampling is PROSAC (OpenCV's USAC), which tries the best ones first: far fewer samples on the
+// navigator's tracks (docs/perception.md "KLT from the previous frame's tracks"); plain RANSAC
+// when PROSAC finds no model, and without ranking. Output: inlier indices into the inputs, and E
+// with x_b^T E x_a = 0. Fewer than 5 (or `min_inliers`) matches, or no model: found = false, no
+// inliers (a value, not an exception). Deterministic: both samplers use a fixed-seed RNG.
 
 #include <string>
 #include <vector>
@@ -34,7 +37,7 @@ struct EssentialResult {
 /// Throws std::invalid_argument if sizes differ, focal_px <= 0 or options are invalid.
 EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
                                  const std::vector<cv::Point2d>& b_norm, double focal_px,
-                                 const EssentialRansacOptions& options = {});
+                                 const EssentialRansacOptions& options = {}, bool ranked = false);
 
 /// Relative pose X_b = R_b_a X_a + t_b_a (|t_b_a| = 1) of the one of E's four decompositions
 /// that puts the most correspondences in front of both cameras (cheirality).

@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "core/control/ibvs_law.hpp"
@@ -142,6 +143,7 @@ class Navigator {
   std::optional<double> ibvs_omega(features::FrameMatcher& fm, Telemetry& tel);
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
+  void remember_tracks(const features::FrameMatcher& fm);
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
 
   memory::VisualMemory map_;
@@ -158,6 +160,10 @@ class Navigator {
   // VNHV: planar pose of IP in IN's frame, per segment (computed once when the segment starts).
   int vnhv_segment_next_ = -1;
   std::optional<control::PlanarPose> vnhv_prev_in_next_;
+  // Speed: the verified point matches of the previous frame per key image of the segment, the
+  // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
+  // segment is forgotten, so it depends on the frames only.
+  std::unordered_map<int, std::vector<features::PointMatch>> klt_priors_;
 };
 
 }  // namespace pepper::core::navigator
