@@ -17,16 +17,20 @@ using test::PlanarPose;
 
 class EssentialSynthetic : public ::testing::TestWithParam<double> {};
 
+// The navigator-like pair of views (8 cm sideways, 10 cm ahead, 0.5 rad) with noisy points.
+auto noisy_scene_points(const CameraIntrinsics& k, double outliers, uint64_t seed) {
+  test::SceneOptions so;
+  so.outlier_fraction = outliers;
+  so.pixel_noise_px = 0.3;
+  test::SyntheticScene scene(k, so, seed);
+  return scene.points(PlanarPose{0.0, 0.0, 0.0}, PlanarPose{0.08, 0.1, 0.5});
+}
+
 TEST_P(EssentialSynthetic, RecoversInliersRejectsOutliers) {
   const double outliers = GetParam();
   const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
-  const PlanarPose key{0.0, 0.0, 0.0}, cur{0.08, 0.1, 0.5};
   for (uint64_t seed = 1; seed <= 8; ++seed) {
-    test::SceneOptions so;
-    so.outlier_fraction = outliers;
-    so.pixel_noise_px = 0.3;
-    test::SyntheticScene scene(k, so, seed);
-    const auto d = scene.points(key, cur);
+    const auto d = noisy_scene_points(k, outliers, seed);
     const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px);
     ASSERT_TRUE(r.found);
     const auto s = test::score(r.inliers, d.is_inlier);
@@ -48,13 +52,8 @@ INSTANTIATE_TEST_SUITE_P(Outliers, EssentialSynthetic, ::testing::Values(0.3, 0.
 TEST_P(EssentialSynthetic, RankedInputMeetsTheSameTargets) {
   const double outliers = GetParam();
   const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
-  const PlanarPose key{0.0, 0.0, 0.0}, cur{0.08, 0.1, 0.5};
   for (uint64_t seed = 1; seed <= 8; ++seed) {
-    test::SceneOptions so;
-    so.outlier_fraction = outliers;
-    so.pixel_noise_px = 0.3;
-    test::SyntheticScene scene(k, so, seed);
-    const auto d = scene.points(key, cur);
+    const auto d = noisy_scene_points(k, outliers, seed);
     cv::RNG rng(seed);
     std::vector<std::pair<double, int>> quality;
     for (size_t i = 0; i < d.a_norm.size(); ++i) {
