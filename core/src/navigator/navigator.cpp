@@ -77,6 +77,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_line_matches >= 1, "min_line_matches", min_line_matches, ">= 1");
   check(min_point_matches >= 1, "min_point_matches", min_point_matches, ">= 1");
   check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
+  check(arrival_min_scale_points >= 3, "arrival_min_scale_points", arrival_min_scale_points,
+        ">= 3");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
         static_cast<double>(segment_overdue_min_ns), ">= 0");
@@ -219,12 +221,13 @@ void Navigator::ensure_pyramids(const localization::Segment& seg) {
 
 std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
                                              const features::ImageFeatures& key_image,
-                                             const features::ImageFeatures& current) const {
+                                             const features::ImageFeatures& current,
+                                             int min_points) const {
   constexpr double kMinSeparationNorm = 0.05;
   const PointSets s = point_sets(m);
   const int n_points = static_cast<int>(s.key.size());
   std::vector<double> ratios;
-  if (n_points >= options_.min_scale_points) {
+  if (n_points >= min_points) {
     localization::append_point_scale_ratios(s.key, s.current, kMinSeparationNorm, ratios);
     return localization::quantile_ratio(ratios, options_.scale_quantile);
   }
@@ -424,7 +427,9 @@ StepResult Navigator::step(const Frame& frame) {
     localization::SwitchCounts counts;
     counts.two_view_next = tv_n.total();
     bool reached_final = false;
-    if (const auto ratio = scale_ratio(tv_n, key(seg.next), fm.current())) {
+    const int min_points =
+        seg.next_next ? options_.min_scale_points : options_.arrival_min_scale_points;
+    if (const auto ratio = scale_ratio(tv_n, key(seg.next), fm.current(), min_points)) {
       counts.next_scale_ratio = *ratio;
       tel.next_scale_ratio = *ratio;
     }

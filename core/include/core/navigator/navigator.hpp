@@ -98,6 +98,12 @@ struct NavigatorOptions {
   /// Arrival at the final image: median scale ratio (key -> current) of the point matches with
   /// IN at least this (1 = exactly the key image's apparent scale), in (0, 2).
   double arrival_scale_ratio = 0.98;
+  /// On the final segment the point ratio needs only this many points (instead of
+  /// min_scale_points). Missing the arrival drives the robot on towards whatever ends the tour,
+  /// while an early arrival only stops it short, so a noisier estimate is the safer side there.
+  /// Measured: white_corridor at VGA kept 12-13 points and 4-9 lines with the final image and
+  /// drove 1 m past it with 20 (docs/method/localization.md). >= 3.
+  int arrival_min_scale_points = 10;
   /// Overdue segment: stop for good when no switch happened for longer than
   /// max(segment_overdue_min_ns, segment_overdue_factor * (t_ns of IN - t_ns of IP in the map)),
   /// frame time. Why: with too few features to switch or to see arrival (measured: the end of
@@ -137,9 +143,11 @@ class Navigator {
   /// True when the current segment has lasted longer than segment_overdue_* allow at t_ns.
   bool segment_overdue(int64_t t_ns) const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
+  /// min_points: points needed for the ratio from points (min_scale_points, or
+  /// arrival_min_scale_points on the final segment).
   std::optional<double> scale_ratio(const features::TwoViewMatches& m,
                                     const features::ImageFeatures& key_image,
-                                    const features::ImageFeatures& current) const;
+                                    const features::ImageFeatures& current, int min_points) const;
   std::optional<double> ibvs_omega(features::FrameMatcher& fm, Telemetry& tel);
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
