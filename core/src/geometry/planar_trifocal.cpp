@@ -565,6 +565,15 @@ struct Incumbent {
   int inliers = 0;
   int rot_inliers = 0;
   bool from_prior = false;
+  /// Takes (m, cost, ...) when it costs less than the incumbent; returns whether it did.
+  bool offer(const Model& m, double m_cost, int m_inliers, int m_rot_inliers) {
+    if (!(m_cost < cost)) return false;
+    model = m;
+    cost = m_cost;
+    inliers = m_inliers;
+    rot_inliers = m_rot_inliers;
+    return true;
+  }
 };
 
 // Samples needed for `confidence` when a clean sample has probability p.
@@ -620,11 +629,7 @@ std::optional<Incumbent> prior_search(const Problem& pb, const PlanarMotionPrior
     const Model m = model_of(phi);
     int inl = 0, rinl = 0;
     const double cost = pb.cost_of(m, &inl, &rinl);
-    if (cost < inc.cost) {
-      inc.model = m;
-      inc.cost = cost;
-      inc.inliers = inl;
-      inc.rot_inliers = rinl;
+    if (inc.offer(m, cost, inl, rinl)) {
       const int wanted = std::max(o.prior_min_samples,
                                   samples_needed(static_cast<double>(inl) / pb.n, o.confidence));
       max_iter = std::min(max_iter, wanted);
@@ -633,12 +638,7 @@ std::optional<Incumbent> prior_search(const Problem& pb, const PlanarMotionPrior
   const Model lo = pb.local_optimisation(inc.model);
   int inl = 0, rinl = 0;
   const double lo_cost = pb.cost_of(lo, &inl, &rinl);
-  if (lo_cost < inc.cost) {
-    inc.model = lo;
-    inc.cost = lo_cost;
-    inc.inliers = inl;
-    inc.rot_inliers = rinl;
-  }
+  inc.offer(lo, lo_cost, inl, rinl);
   return inc;
 }
 
