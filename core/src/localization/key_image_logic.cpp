@@ -155,7 +155,7 @@ void append_point_scale_ratios(std::span<const cv::Point2d> key_norm,
                                std::span<const cv::Point2d> current_norm,
                                double min_separation_norm, std::vector<double>& ratios) {
   if (key_norm.size() != current_norm.size()) {
-    throw std::invalid_argument("median_scale_ratio: sizes differ");
+    throw std::invalid_argument("append_point_scale_ratios: sizes differ");
   }
   const size_t n = key_norm.size();
   if (n < 2) return;
