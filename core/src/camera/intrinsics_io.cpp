@@ -1,5 +1,6 @@
 // Intrinsics files: ViSP camera XML and the plain YAML/JSON form (see intrinsics_io.hpp).
 #include "core/camera/intrinsics_io.hpp"
+#include "core/camera/intrinsics_json.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -212,18 +213,11 @@ CameraIntrinsics load_intrinsics_plain(const std::string& path) {
     } catch (const std::exception& e) {
       throw IntrinsicsFileError(path, std::string("not valid JSON: ") + e.what());
     }
-    auto get = [&](const char* key) -> double {
-      if (!j.is_object() || !j.contains(key) || !j[key].is_number()) {
-        throw IntrinsicsFileError(path, std::string("missing or non-numeric key '") + key + "'");
-      }
-      return j[key].get<double>();
-    };
-    k.width_px = static_cast<int>(get("width_px"));
-    k.height_px = static_cast<int>(get("height_px"));
-    k.fx_px = get("fx_px");
-    k.fy_px = get("fy_px");
-    k.cx_px = get("cx_px");
-    k.cy_px = get("cy_px");
+    try {
+      k = intrinsics_from_json(j);
+    } catch (const std::invalid_argument& e) {
+      throw IntrinsicsFileError(path, e.what());
+    }
   } else if (ext == ".yaml" || ext == ".yml") {
     YAML::Node root;
     try {
@@ -268,9 +262,7 @@ void save_intrinsics_plain(const CameraIntrinsics& k, const std::string& path) {
     os << "width_px: " << k.width_px << "\nheight_px: " << k.height_px << "\nfx_px: " << k.fx_px
        << "\nfy_px: " << k.fy_px << "\ncx_px: " << k.cx_px << "\ncy_px: " << k.cy_px << "\n";
   } else {
-    nlohmann::json j{{"width_px", k.width_px}, {"height_px", k.height_px}, {"fx_px", k.fx_px},
-                     {"fy_px", k.fy_px},       {"cx_px", k.cx_px},         {"cy_px", k.cy_px}};
-    os << j.dump(2) << "\n";
+    os << intrinsics_to_json(k).dump(2) << "\n";
   }
   const std::string tmp = path + ".tmp";
   {

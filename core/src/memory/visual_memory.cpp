@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "core/camera/intrinsics_json.hpp"
 #include "memory/detail/binary_io.hpp"
 
 namespace pepper::core::memory {
@@ -100,11 +101,6 @@ std::string key_name(size_t i, const char* ext) {
   return os.str();
 }
 
-json camera_json(const CameraIntrinsics& k) {
-  return {{"width_px", k.width_px}, {"height_px", k.height_px}, {"fx_px", k.fx_px},
-          {"fy_px", k.fy_px},       {"cx_px", k.cx_px},         {"cy_px", k.cy_px}};
-}
-
 // Manifest CRC: over dump() of the manifest without its "manifest_crc32" field (nlohmann's
 // object keys are sorted, so dump() is canonical).
 uint32_t manifest_crc(json j) {
@@ -159,15 +155,10 @@ Manifest parse_manifest(const fs::path& dir) {
       throw MapError(Kind::kChecksumMismatch, path,
                      path.string() + ": manifest CRC-32 mismatch (edited or corrupt)");
     }
-    const json& c = j.at("camera");
-    m.camera.width_px = c.at("width_px").get<int>();
-    m.camera.height_px = c.at("height_px").get<int>();
-    m.camera.fx_px = c.at("fx_px").get<double>();
-    m.camera.fy_px = c.at("fy_px").get<double>();
-    m.camera.cx_px = c.at("cx_px").get<double>();
-    m.camera.cy_px = c.at("cy_px").get<double>();
-    if (const auto errors = m.camera.validate(); !errors.empty()) {
-      throw malformed("camera: " + errors.front());
+    try {
+      m.camera = camera::intrinsics_from_json(j.at("camera"));
+    } catch (const std::invalid_argument& e) {
+      throw malformed(std::string("camera: ") + e.what());
     }
     m.parameters_json = j.at("parameters").dump();
     for (const json& k : j.at("key_images")) {
@@ -297,7 +288,7 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
     json manifest = {
         {"format", kFormatName},
         {"format_version", kMapFormatVersion},
-        {"camera", camera_json(map.camera)},
+        {"camera", camera::intrinsics_to_json(map.camera)},
         {"parameters", parameters},
         {"key_images", keys},
         {"final_image_index", map.final_index()},

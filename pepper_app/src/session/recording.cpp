@@ -9,6 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/camera/intrinsics_json.hpp"
+
 namespace pepper::app {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -18,26 +20,12 @@ namespace {
 constexpr const char* kFormat = "pepper-recording";
 constexpr int kVersion = 1;
 
-json camera_to_json(const core::CameraIntrinsics& k) {
-  return json{{"width_px", k.width_px}, {"height_px", k.height_px}, {"fx_px", k.fx_px},
-              {"fy_px", k.fy_px},       {"cx_px", k.cx_px},         {"cy_px", k.cy_px}};
-}
-
 core::CameraIntrinsics camera_from_json(const json& j, const fs::path& file) {
-  core::CameraIntrinsics k;
   try {
-    k.width_px = j.at("width_px").get<int>();
-    k.height_px = j.at("height_px").get<int>();
-    k.fx_px = j.at("fx_px").get<double>();
-    k.fy_px = j.at("fy_px").get<double>();
-    k.cx_px = j.at("cx_px").get<double>();
-    k.cy_px = j.at("cy_px").get<double>();
-  } catch (const json::exception& e) {
+    return core::camera::intrinsics_from_json(j);
+  } catch (const std::invalid_argument& e) {
     throw RecordingError(file.string() + ": camera: " + e.what());
   }
-  const auto errors = k.validate();
-  if (!errors.empty()) throw RecordingError(file.string() + ": camera: " + errors.front());
-  return k;
 }
 
 void write_file_atomically(const fs::path& path, const std::string& content) {
@@ -73,7 +61,7 @@ RecordingWriter::RecordingWriter(fs::path folder, const core::CameraIntrinsics& 
   json config = json::parse(config_json, nullptr, /*allow_exceptions=*/false);
   if (config.is_discarded()) config = json::object();
   const json manifest{{"format", kFormat}, {"version", kVersion},
-                      {"camera", camera_to_json(camera)}, {"source", source},
+                      {"camera", core::camera::intrinsics_to_json(camera)}, {"source", source},
                       {"config", config}};
   write_file_atomically(folder_ / "recording.json", manifest.dump(2) + "\n");
   index_.open(folder_ / "frames.jsonl", std::ios::app);
