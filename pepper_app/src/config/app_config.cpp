@@ -128,7 +128,23 @@ template <class V> void visit(V& v, cc::VnhvOptions& o) {
   v("kp_1_m2", o.kp_1_m2);
   v("kd_1_m", o.kd_1_m);
   v("max_abs_theta_rad", o.max_abs_theta_rad);
-  v("nominal_distance_to_next_m", o.nominal_distance_to_next_m);
+  v("teach_speed_m_s", o.teach_speed_m_s);
+  v.group("pose", [&](V& s) {
+    s("min_parallax_rad", o.pose.min_parallax_rad);
+    s("max_reprojection_px", o.pose.max_reprojection_px);
+    s("min_points", o.pose.min_points);
+    s("ransac_iterations", o.pose.ransac_iterations);
+    s("gauss_newton_iterations", o.pose.gauss_newton_iterations);
+  });
+  v.group("filter", [&](V& s) {
+    s("measurement_sigma_m", o.filter.measurement_sigma_m);
+    s("measurement_sigma_rad", o.filter.measurement_sigma_rad);
+    s("process_sigma_m", o.filter.process_sigma_m);
+    s("process_sigma_rad", o.filter.process_sigma_rad);
+    s("gate_chi2", o.filter.gate_chi2);
+    s("max_rejections", o.filter.max_rejections);
+    s("max_prediction_ns", o.filter.max_prediction_ns);
+  });
 }
 template <class V> void visit(V& v, cc::VelocityScheduleOptions& o) {
   v("v_straight_m_s", o.v_straight_m_s);

@@ -104,20 +104,25 @@ TEST(VnhvGeometry, PlanarPoseFromCameraTransform) {
 TEST(VnhvGeometry, DeviationFromSegment) {
   // Segment from IP at (-1, 0) to IN at the origin, travel along +x.
   const PlanarPose prev{-1.0, 0.0, 0.0};
-  auto dev = deviation_from_segment(prev, {-0.5, 0.1, 0.2}, -1.0);
+  auto dev = deviation_from_segment(prev, {-0.5, 0.1, 0.2});
   ASSERT_TRUE(dev);
   EXPECT_NEAR(dev->lateral_m, 0.1, 1e-15);
   EXPECT_NEAR(dev->heading_rad, 0.2, 1e-15);
-  // Scale-free current position, rescaled to 0.5 m from IN: bearing (-0.3, -0.4) -> (-0.3,-0.4).
-  dev = deviation_from_segment({-3.0, 0.0, 0.0}, {-3.0, -4.0, 0.0}, 0.5);
+  // The lateral offset is in the poses' unit, whatever IP's distance: right of the line by 4.
+  dev = deviation_from_segment({-3.0, 0.0, 0.0}, {-3.0, -4.0, 0.0});
   ASSERT_TRUE(dev);
-  EXPECT_NEAR(dev->lateral_m, -0.4, 1e-12);
+  EXPECT_NEAR(dev->lateral_m, -4.0, 1e-12);
   // Segment direction rotated: IP at (-1, -1): direction 45 deg left.
-  dev = deviation_from_segment({-1.0, -1.0, 0.0}, {-0.5, -0.5, std::numbers::pi / 4}, -1.0);
+  dev = deviation_from_segment({-1.0, -1.0, 0.0}, {-0.5, -0.5, std::numbers::pi / 4});
   ASSERT_TRUE(dev);
   EXPECT_NEAR(dev->lateral_m, 0.0, 1e-15);
   EXPECT_NEAR(dev->heading_rad, 0.0, 1e-15);
-  EXPECT_FALSE(deviation_from_segment({0.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}, -1.0));
+  // Left of that line by sqrt(2) / 2, heading 0.1 rad left of it.
+  dev = deviation_from_segment({-1.0, -1.0, 0.0}, {-1.0, 0.0, std::numbers::pi / 4 + 0.1});
+  ASSERT_TRUE(dev);
+  EXPECT_NEAR(dev->lateral_m, std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(dev->heading_rad, 0.1, 1e-15);
+  EXPECT_FALSE(deviation_from_segment({0.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}));
 }
 
 TEST(VnhvLaw, ValidateNamesBadFields) {
@@ -125,10 +130,16 @@ TEST(VnhvLaw, ValidateNamesBadFields) {
   EXPECT_TRUE(o.validate().empty());
   o.kd_1_m = 0.0;
   o.max_abs_theta_rad = 2.0;
+  o.teach_speed_m_s = 0.0;
+  o.pose.min_points = 2;
+  o.filter.gate_chi2 = -1.0;
   const auto e = o.validate();
-  ASSERT_EQ(e.size(), 2u);
+  ASSERT_EQ(e.size(), 5u);
   EXPECT_NE(e[0].find("kd_1_m"), std::string::npos);
   EXPECT_NE(e[1].find("max_abs_theta_rad"), std::string::npos);
+  EXPECT_NE(e[2].find("teach_speed_m_s"), std::string::npos);
+  EXPECT_NE(e[3].find("pose.min_points"), std::string::npos);
+  EXPECT_NE(e[4].find("filter.gate_chi2"), std::string::npos);
 }
 
 }  // namespace

@@ -151,6 +151,8 @@ class Navigator {
   std::optional<double> ibvs_omega(features::FrameMatcher& fm, Telemetry& tel);
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
+  /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
+  bool vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev, double focal_px) const;
   void remember_tracks(const features::FrameMatcher& fm);
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
 
@@ -165,9 +167,12 @@ class Navigator {
   int64_t last_good_t_ns_ = 0;
   std::optional<int64_t> segment_start_t_ns_;  ///< frame time when the current segment began
   std::optional<int64_t> last_t_ns_;
-  // VNHV: planar pose of IP in IN's frame, per segment (computed once when the segment starts).
+  // VNHV, per segment (IN = vnhv_segment_next_): its reconstruction (built when the segment
+  // starts; nullopt when that failed: IBVS drives), its metric length, the deviation filter.
   int vnhv_segment_next_ = -1;
-  std::optional<control::PlanarPose> vnhv_prev_in_next_;
+  std::optional<control::SegmentModel> vnhv_model_;
+  double vnhv_segment_length_m_ = 0.0;
+  control::DeviationFilter vnhv_filter_;
   // Speed: the verified point matches of the previous frame per key image of the segment, the
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
   // segment is forgotten, so it depends on the frames only.
