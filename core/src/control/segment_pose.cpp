@@ -213,12 +213,11 @@ std::optional<SegmentModel> build_segment_model(const PlanarPose& prev_in_next,
     const double l_prev = (a * g1 - b * g0) / det;
     if (l_next <= kMinDepth || l_prev <= kMinDepth) continue;
     const cv::Vec3d X = l_next * d_next;
-    const cv::Vec3d Xp = to_camera(prev, X);
-    if (Xp[2] <= kMinDepth) continue;
-    const double err_next = std::hypot(X[0] / X[2] - m.next_norm.x, X[1] / X[2] - m.next_norm.y);
-    const double err_prev =
-        std::hypot(Xp[0] / Xp[2] - m.other_norm.x, Xp[1] / Xp[2] - m.other_norm.y);
-    if (err_next > max_err || err_prev > max_err) continue;
+    // IN is the origin of its own frame (identity pose); behind either camera: infinite error.
+    if (reprojection_error(PlanarPose{}, X, m.next_norm) > max_err ||
+        reprojection_error(prev, X, m.other_norm) > max_err) {
+      continue;
+    }
     model.point_by_corner[m.corner] = X;
   }
   if (static_cast<int>(model.point_by_corner.size()) < options.min_points) return std::nullopt;
