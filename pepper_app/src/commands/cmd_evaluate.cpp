@@ -47,6 +47,7 @@ struct EvaluateArgs {
   std::string config_file;
   std::vector<std::string> sets;
   std::string trace_dir;
+  std::vector<int> only_runs;
   std::string command_line;
 };
 
@@ -103,6 +104,7 @@ int run_evaluate(const EvaluateArgs& a) {
     return 2;
   }
   o.starts = a.starts;
+  o.only_runs = a.only_runs;
   o.seed = a.seed;
   o.trace_dir = a.trace_dir;
   o.perturb_lateral_m = a.lateral_m;
@@ -183,6 +185,9 @@ void register_evaluate_command(CLI::App& app) {
                   "Write one JSON-lines trace per run here (ground truth, command, telemetry per "
                   "frame) to diagnose a failed run");
   cmd->add_option("--starts", args->starts, "Replay runs per configuration")->capture_default_str();
+  cmd->add_option("--run", args->only_runs,
+                  "Replay only these runs of the --starts (1-based; same starts and seeds as in "
+                  "the full evaluation), e.g. --starts 10 --run 5 8 --trace DIR");
   cmd->add_option("--features", args->features, "lines, points or both")->capture_default_str();
   cmd->add_option("--controller", args->controller, "ibvs or vnhv")->capture_default_str();
   cmd->add_option("--seed", args->seed, "Seed of start perturbations, noise and disturbances")

@@ -58,6 +58,10 @@ std::vector<std::string> EvaluationOptions::validate() const {
     if (!ok) e.push_back(msg);
   };
   check(starts >= 1 && starts <= 1000, "starts = " + std::to_string(starts) + ": must be in [1, 1000]");
+  for (int r : only_runs) {
+    check(r >= 1 && r <= starts, "run " + std::to_string(r) + ": must be in [1, starts = " +
+                                     std::to_string(starts) + "]");
+  }
   check(width_px >= 64 && height_px >= 48 && width_px <= 4096 && height_px <= 4096,
         "size " + std::to_string(width_px) + "x" + std::to_string(height_px) +
             ": must be within 64x48 .. 4096x4096");
@@ -429,6 +433,11 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const mock::
     for (const auto& n : dw.notes) progress("  disturbance: " + n);
   }
   for (int k = 0; k < options.starts; ++k) {
+    if (!options.only_runs.empty() &&
+        std::find(options.only_runs.begin(), options.only_runs.end(), k + 1) ==
+            options.only_runs.end()) {
+      continue;
+    }
     const mock::Pose2D start = replay_start_pose(*world, k, options);
     RunResult r = replay_run(teach, dw.world, dw.lighting, start, k, options);
     if (progress) {

@@ -41,6 +41,9 @@ namespace pepper::app::evaluation {
 
 struct EvaluationOptions {
   int starts = 10;                  ///< replay runs, >= 1
+  /// Replay only these of the `starts` runs (1-based, same starts as in the full evaluation);
+  /// empty: all. For re-running one failed start with --trace.
+  std::vector<int> only_runs;
   uint64_t seed = 1;                ///< start perturbations, disturbances, noise
   int width_px = 640;               ///< camera size (VGA; 320x240 for quick runs)
   int height_px = 480;

@@ -63,6 +63,26 @@ TEST(ClosedLoop, ShortTourWithOneTurnConvergesFromPerturbedStarts) {
     for (const RunSample& s : r.samples) ASSERT_TRUE(std::isfinite(s.omega_rad_s));
   }
   EXPECT_EQ(ev.summary.success_rate, 1.0);
+
+  // Re-running one start alone (--run 2) replays exactly that start: same pose, same result.
+  EvaluationOptions only_second = o;
+  only_second.only_runs = {2};
+  const Evaluation again = evaluate(teach, small_room(), only_second);
+  ASSERT_EQ(again.runs.size(), 1u);
+  EXPECT_EQ(again.runs[0].index, ev.runs[1].index);
+  EXPECT_DOUBLE_EQ(again.runs[0].start_x_m, ev.runs[1].start_x_m);
+  EXPECT_DOUBLE_EQ(again.runs[0].start_yaw_rad, ev.runs[1].start_yaw_rad);
+  EXPECT_DOUBLE_EQ(again.runs[0].lateral_rms_m, ev.runs[1].lateral_rms_m);
+}
+
+TEST(ClosedLoop, OnlyRunsMustBeAmongTheStarts) {
+  EvaluationOptions o = qvga_options();
+  o.only_runs = {3};
+  const auto errors = o.validate();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("run 3"), std::string::npos);
+  o.only_runs = {1, 2};
+  EXPECT_TRUE(o.validate().empty());
 }
 
 TEST(Disturbances, MovedFurnitureKeepsTheTaughtPathClear) {
