@@ -90,6 +90,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_point_texture >= 0.0, "min_point_texture", min_point_texture, ">= 0");
   check(arrival_scale_ratio > 0.0 && arrival_scale_ratio < 2.0, "arrival_scale_ratio",
         arrival_scale_ratio, "in (0, 2)");
+  check(arrival_fade_ratio == 0.0 || (arrival_fade_ratio > 0.0 && arrival_fade_ratio < 2.0),
+        "arrival_fade_ratio", arrival_fade_ratio, "0 (off) or in (0, 2)");
   return errors;
 }
 
@@ -200,6 +202,7 @@ void Navigator::reset() {
   last_t_ns_.reset();
   vnhv_segment_next_ = -1;
   segment_start_t_ns_.reset();
+  final_ratio_in_ = -1;
   klt_priors_.clear();
 }
 
@@ -451,6 +454,7 @@ StepResult Navigator::step(const Frame& frame) {
                                                            : StopReason::kNotLocalized));
     }
     segment_start_t_ns_ = frame.t_ns;
+    final_ratio_in_ = -1;  // a new segment: no ratio seen on it yet
   }
 
   // Switching (counts on the current segment).
@@ -498,7 +502,15 @@ StepResult Navigator::step(const Frame& frame) {
         }
       }
     } else {
-      reached_final = counts.next_scale_ratio >= options_.arrival_scale_ratio;  // NaN: false
+      const double ratio = counts.next_scale_ratio;
+      if (final_ratio_in_ != seg.next) {
+        final_ratio_in_ = seg.next;
+        final_best_ratio_ = std::numeric_limits<double>::quiet_NaN();
+      }
+      if (!std::isnan(ratio) && !(ratio <= final_best_ratio_)) final_best_ratio_ = ratio;
+      const bool faded = options_.arrival_fade_ratio > 0.0 && std::isnan(ratio) &&
+                         final_best_ratio_ >= options_.arrival_fade_ratio;  // NaN: false
+      reached_final = ratio >= options_.arrival_scale_ratio || faded;  // NaN: false
     }
     const localization::SwitchUpdate u = switcher_->update(counts, reached_final);
     tel.switch_streak = u.streak;

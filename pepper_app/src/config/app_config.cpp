@@ -179,6 +179,7 @@ template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v("min_point_texture", o.min_point_texture);
   v("arrival_scale_ratio", o.arrival_scale_ratio);
   v("arrival_min_scale_points", o.arrival_min_scale_points);
+  v("arrival_fade_ratio", o.arrival_fade_ratio);
   v("min_scale_points", o.min_scale_points);
   v("scale_quantile", o.scale_quantile);
   v("min_scale_lines", o.min_scale_lines);

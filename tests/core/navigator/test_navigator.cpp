@@ -130,6 +130,48 @@ TEST(Navigator, StopsForGoodWhenASegmentIsOverdue) {
   }
 }
 
+// The final image fades: the taught frames up to the end (the ratio with the final image
+// reaches about 1), but arrival_scale_ratio is set out of reach, then blank frames (nothing
+// matches any more, as in a close-up of the furniture that ends a tour). With
+// arrival_fade_ratio the navigator counts those frames as arrival and stops with kTourComplete;
+// with it off it holds, then stops as lost (the previous behaviour).
+TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
+  auto run = [](double fade_ratio) {
+    NavigatorOptions o;
+    o.arrival_scale_ratio = 1.9;  // never reached: only the fade rule can complete the tour
+    o.arrival_fade_ratio = fade_ratio;
+    o.hold_ns = 600'000'000;
+    Navigator nav(tour().map, o);
+    std::vector<StepResult> out;
+    for (const Frame& f : tour().frames) out.push_back(nav.step(f));
+    const int final_in = static_cast<int>(tour().map.key_images.size()) - 1;
+    EXPECT_EQ(out.back().telemetry.in, final_in);
+    EXPECT_FALSE(out.back().command.stop);
+    const cv::Mat blank(camera().height_px, camera().width_px, CV_8UC1, cv::Scalar(128));
+    for (int i = 1; i <= 6; ++i) {
+      Frame f;
+      f.gray = blank;
+      f.t_ns = tour().frames.back().t_ns + i * 200'000'000LL;
+      f.index = 10'000 + i;
+      out.push_back(nav.step(f));
+    }
+    return std::vector<StepResult>(out.end() - 6, out.end());
+  };
+  const auto faded = run(0.95);
+  // The consecutive-frame rule (switching.consecutive_frames) applies as for a measured ratio;
+  // the first blank frame may still keep stale KLT tracks from the previous frame (measured:
+  // 12 points), so the stop comes after n or n + 1 blank frames, and stays.
+  const int n = localization::SwitcherOptions{}.consecutive_frames;
+  for (int i = 0; i < n - 1; ++i) EXPECT_FALSE(faded[i].command.stop) << i;
+  for (int i = n; i < 6; ++i) {
+    EXPECT_TRUE(faded[i].command.stop) << i;
+    EXPECT_EQ(faded[i].command.reason, StopReason::kTourComplete) << i;
+  }
+  const auto off = run(0.0);
+  for (const StepResult& r : off) EXPECT_NE(r.command.reason, StopReason::kTourComplete);
+  EXPECT_EQ(off.back().command.reason, StopReason::kFeaturesLost);
+}
+
 TEST(Navigator, NotLocalisedOnAnUnknownViewStops) {
   Navigator nav(tour().map);
   Frame f;
