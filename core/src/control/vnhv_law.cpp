@@ -21,6 +21,7 @@ std::vector<std::string> VnhvOptions::validate() const {
   check(std::isfinite(max_abs_theta_rad) && max_abs_theta_rad > 0.0 &&
             max_abs_theta_rad < std::numbers::pi / 2.0,
         "max_abs_theta_rad", max_abs_theta_rad, "in (0, pi/2)");
+  check(max_segment_turn_rad > 0.0, "max_segment_turn_rad", max_segment_turn_rad, "> 0");
   check(std::isfinite(teach_speed_m_s) && teach_speed_m_s > 0.0, "teach_speed_m_s", teach_speed_m_s,
         "> 0");
   for (auto& e : pose.validate()) errors.push_back(std::move(e));

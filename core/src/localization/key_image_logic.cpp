@@ -127,8 +127,9 @@ SwitchUpdate KeyImageSwitcher::update(const SwitchCounts& counts, bool reached_f
         options_.passed_next_scale_ratio > 0.0 && ratio >= options_.passed_next_scale_ratio;
     // Unknown scale (too few verified points, e.g. facing a plain wall): the guard cannot
     // judge, so the paper's rules decide alone; blocking here would stall at IN for good.
-    const bool guard_ok = options_.min_next_scale_ratio <= 0.0 || std::isnan(ratio) ||
-                          ratio >= options_.min_next_scale_ratio;
+    const bool guard_ok =
+        options_.min_next_scale_ratio <= 0.0 ||
+        (std::isnan(ratio) ? counts.blind_switch_allowed : ratio >= options_.min_next_scale_ratio);
     if (passed) u.criteria_bits |= kCriterionPassedNext;
     if (u.criterion != SwitchCriterion::kNone && !guard_ok)
       u.criteria_bits |= kCriterionGuardBlocked;

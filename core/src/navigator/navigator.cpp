@@ -78,6 +78,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
   check(arrival_min_scale_points >= 3, "arrival_min_scale_points", arrival_min_scale_points,
         ">= 3");
+  check(blind_switch_min_time_fraction >= 0.0 && blind_switch_min_time_fraction <= 1.0,
+        "blind_switch_min_time_fraction", blind_switch_min_time_fraction, "0 (off) or in (0, 1]");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
         static_cast<double>(segment_overdue_min_ns), ">= 0");
@@ -202,6 +204,7 @@ void Navigator::reset() {
   last_t_ns_.reset();
   vnhv_segment_next_ = -1;
   segment_start_t_ns_.reset();
+  segment_from_switch_ = false;
   final_ratio_in_ = -1;
   klt_priors_.clear();
 }
@@ -242,6 +245,15 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
                                          kMinSeparationNorm, ratios);
   if (static_cast<int>(ratios.size()) < options_.min_scale_pairs) return std::nullopt;
   return localization::quantile_ratio(ratios, options_.scale_quantile);
+}
+
+bool Navigator::blind_switch_allowed(int64_t t_ns) const {
+  const double fraction = options_.blind_switch_min_time_fraction;
+  if (fraction <= 0.0 || !segment_from_switch_ || !switcher_ || !segment_start_t_ns_) return true;
+  const localization::Segment& seg = switcher_->segment();
+  const double taught_ns = static_cast<double>(map_.key_images[seg.next].t_ns -
+                                               map_.key_images[seg.prev].t_ns);
+  return static_cast<double>(t_ns - *segment_start_t_ns_) >= fraction * taught_ns;
 }
 
 bool Navigator::segment_overdue(int64_t t_ns) const {
@@ -361,7 +373,8 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
-      if (const auto prev = control::fit_arc_segment(obs, focal_px, o.pose)) {
+      const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);
+      if (prev && std::abs(prev->yaw_rad) <= o.max_segment_turn_rad) {
         vnhv_model_ = control::build_segment_model(*prev, obs, focal_px, o.pose);
       }
     }
@@ -454,6 +467,7 @@ StepResult Navigator::step(const Frame& frame) {
                                                            : StopReason::kNotLocalized));
     }
     segment_start_t_ns_ = frame.t_ns;
+    segment_from_switch_ = false;
     final_ratio_in_ = -1;  // a new segment: no ratio seen on it yet
   }
 
@@ -467,6 +481,7 @@ StepResult Navigator::step(const Frame& frame) {
     tel.n_points_next = tv_n.n_points();
     localization::SwitchCounts counts;
     counts.two_view_next = tv_n.total();
+    counts.blind_switch_allowed = blind_switch_allowed(frame.t_ns);
     bool reached_final = false;
     const int min_points =
         seg.next_next ? options_.min_scale_points : options_.arrival_min_scale_points;
@@ -525,6 +540,7 @@ StepResult Navigator::step(const Frame& frame) {
     if (tel.switched) {
       ensure_pyramids(switcher_->segment());
       segment_start_t_ns_ = frame.t_ns;
+      segment_from_switch_ = true;
     }
     if (segment_overdue(frame.t_ns)) {
       state_ = NavState::kOverdue;

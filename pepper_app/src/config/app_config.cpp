@@ -129,6 +129,7 @@ template <class V> void visit(V& v, cc::VnhvOptions& o) {
   v("kd_1_m", o.kd_1_m);
   v("max_abs_theta_rad", o.max_abs_theta_rad);
   v("teach_speed_m_s", o.teach_speed_m_s);
+  v("max_segment_turn_rad", o.max_segment_turn_rad);
   v.group("pose", [&](V& s) {
     s("min_parallax_rad", o.pose.min_parallax_rad);
     s("max_reprojection_px", o.pose.max_reprojection_px);
@@ -180,6 +181,7 @@ template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v("arrival_scale_ratio", o.arrival_scale_ratio);
   v("arrival_min_scale_points", o.arrival_min_scale_points);
   v("arrival_fade_ratio", o.arrival_fade_ratio);
+  v("blind_switch_min_time_fraction", o.blind_switch_min_time_fraction);
   v("min_scale_points", o.min_scale_points);
   v("scale_quantile", o.scale_quantile);
   v("min_scale_lines", o.min_scale_lines);

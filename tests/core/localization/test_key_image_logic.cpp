@@ -161,6 +161,18 @@ TEST(KeyImageSwitcher, ScaleGuardAndPassedNext) {
   SwitchCounts none = three_view(10, 20);  // ...and without a paper rule, nothing happens
   none.next_scale_ratio = std::nan("");
   EXPECT_EQ(s.update(none, false).streak, 0);
+  // ...unless the caller says a blind switch is not allowed yet (the navigator: too little
+  // time on the segment): then the guard blocks the unknown ratio too.
+  SwitchCounts early = c;
+  early.blind_switch_allowed = false;
+  u = s.update(early, false);
+  EXPECT_EQ(u.streak, 0);
+  EXPECT_EQ(u.criteria_bits, 1 | kCriterionGuardBlocked);
+  EXPECT_EQ(s.update(early, false).event, SwitchEvent::kNone);
+  EXPECT_EQ(s.segment().next, 3);
+  early.next_scale_ratio = 0.95;  // a measured ratio is judged on its own
+  EXPECT_EQ(s.update(early, false).streak, 1);
+  s.update(none, false);  // reset the streak
   // No paper rule, but IN clearly passed (scale > 1.05): switch after two frames as well.
   SwitchCounts passed = three_view(10, 20);
   passed.next_scale_ratio = 1.1;

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <utility>
 
 #include "core/mapping/teacher.hpp"
 #include "core/navigator/navigator.hpp"
@@ -170,6 +172,46 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
   const auto off = run(0.0);
   for (const StepResult& r : off) EXPECT_NE(r.command.reason, StopReason::kTourComplete);
   EXPECT_EQ(off.back().command.reason, StopReason::kFeaturesLost);
+}
+
+// Blind switches wait for the taught time: the taught frames replayed 2x faster than taught,
+// with the scale ratio never measurable (min_scale_points out of reach, no line ratio). With
+// blind_switch_min_time_fraction = 0.6 every switch after the first comes at least 0.6 x the
+// taught IP -> IN time after the previous one; without the rule some come sooner (so the check
+// bites).
+TEST(Navigator, BlindSwitchesWaitForTheTaughtTimeOnTheSegment) {
+  auto switch_gaps = [](double fraction) {
+    NavigatorOptions o;
+    o.min_scale_points = 100'000;
+    o.arrival_min_scale_points = 100'000;
+    o.min_scale_lines = 0;
+    o.blind_switch_min_time_fraction = fraction;
+    Navigator nav(tour().map, o);
+    const auto& keys = tour().map.key_images;
+    const int64_t t0 = tour().frames.front().t_ns;
+    std::vector<std::pair<int64_t, int64_t>> gaps;  // (time on the segment, taught time)
+    std::optional<int64_t> last_switch;
+    int ip = -1, in = -1;
+    for (const Frame& taught : tour().frames) {
+      Frame f = taught;
+      f.t_ns = t0 + (taught.t_ns - t0) / 2;
+      const StepResult r = nav.step(f);
+      if (r.telemetry.switched && last_switch) {
+        gaps.emplace_back(f.t_ns - *last_switch, keys[in].t_ns - keys[ip].t_ns);
+      }
+      if (r.telemetry.switched) last_switch = f.t_ns;
+      ip = r.telemetry.ip;
+      in = r.telemetry.in;
+    }
+    return gaps;
+  };
+  const auto guarded = switch_gaps(0.6);
+  ASSERT_GE(guarded.size(), 3u);
+  for (const auto& [spent, taught] : guarded) EXPECT_GE(spent, 0.6 * taught);
+  const auto free = switch_gaps(0.0);
+  int sooner = 0;
+  for (const auto& [spent, taught] : free) sooner += spent < 0.6 * taught ? 1 : 0;
+  EXPECT_GT(sooner, 0);
 }
 
 TEST(Navigator, NotLocalisedOnAnUnknownViewStops) {

@@ -38,6 +38,13 @@ struct VnhvOptions {
   /// duration (key image t_ns) times this (the map stores no odometry). The mock worlds teach at
   /// 0.2-0.25 m/s.
   double teach_speed_m_s = 0.2;
+  /// Segments whose taught heading change (the arc model's |yaw of IP in IN's frame|) exceeds
+  /// this are driven by IBVS: the chord of a turning segment is a poor reference for the path,
+  /// and IBVS looks ahead at INN. Measured (room_corridor_room, VGA, seed 1, runs 1, 3, 4 of
+  /// 10): with VNHV on every segment it can model all three hit the wall at the lab doorway
+  /// (16.4-17.0 m); with 0.1 rad all three complete (lateral RMS 6.9-7.8 cm). rad, > 0 (large:
+  /// VNHV on every segment it can model).
+  double max_segment_turn_rad = 0.1;
   SegmentPoseOptions pose;
   DeviationFilterOptions filter;
 

@@ -67,6 +67,10 @@ struct SwitchCounts {
   int two_view_prev = 0;       ///< n(IP, Ia)
   /// Apparent scale of IN's verified points in Ia (median_scale_ratio), NaN when unknown.
   double next_scale_ratio = std::numeric_limits<double>::quiet_NaN();
+  /// With an unknown next_scale_ratio the guard cannot judge; this is the caller's verdict
+  /// instead (the navigator: enough time spent on the segment, NavigatorOptions::
+  /// blind_switch_min_time_fraction). true: the paper's rules decide alone.
+  bool blind_switch_allowed = true;
 };
 
 /// Bit set of the criteria that held: 1 three-view rule, 2 two-view rule (paper), 4 "passed IN"
@@ -86,7 +90,8 @@ struct SwitcherOptions {
   /// - guard: a switch is wanted only when next_scale_ratio >= min_next_scale_ratio. Without
   ///   it, a short next segment (dense key images in a turn) makes the three-view rule fire as
   ///   soon as the robot leaves IP, and the robot turns early. 0 disables (paper's rule).
-  ///   An unknown ratio (NaN: too few points) does not block: the paper's rules decide.
+  ///   An unknown ratio (NaN: too few points) blocks only when the caller says so
+  ///   (SwitchCounts::blind_switch_allowed); otherwise the paper's rules decide.
   double min_next_scale_ratio = 0.9;
   /// - "passed IN": a switch is also wanted when next_scale_ratio >= passed_next_scale_ratio,
   ///   even if neither paper rule holds (with near-identical IN and INN the rules can stall).

@@ -123,6 +123,15 @@ struct NavigatorOptions {
   /// and switches come early or late by up to a metre, so one replayed segment took up to 4x
   /// its taught time and 9.7 s (white_corridor); 10 s / 4x stopped good runs there. 20 s / 6x
   /// leaves twice that margin (3 m at replay speed). factor 0: off. factor >= 0, min_ns >= 0.
+  /// Blind switches: while the scale ratio with IN is unknown (too few points), a switch is
+  /// allowed only after this fraction of the taught IP -> IN time has passed on a segment that
+  /// began with a switch (not after a (re)localisation, where the robot may start anywhere on
+  /// it). Why: in feature-poor stretches the paper's count rules fire on noise; measured in
+  /// white_corridor (VGA, seed 1, run 10 of 10) three switches came 4-6 frames apart, the
+  /// segment then was 2.7 m ahead of the robot and the overdue rule stopped it. Replay (0.15
+  /// m/s) is slower than the shipped worlds' teach drives (0.2-0.25 m/s), so a segment takes
+  /// longer to replay than it took to teach. 0: off, else in (0, 1].
+  double blind_switch_min_time_fraction = 0.3;
   double segment_overdue_factor = 6.0;
   int64_t segment_overdue_min_ns = 20'000'000'000;
   std::vector<std::string> validate() const;
@@ -152,6 +161,8 @@ class Navigator {
   void localize(features::FrameMatcher& fm, Telemetry& tel);
   /// True when the current segment has lasted longer than segment_overdue_* allow at t_ns.
   bool segment_overdue(int64_t t_ns) const;
+  /// blind_switch_min_time_fraction: whether a switch without a scale ratio is allowed at t_ns.
+  bool blind_switch_allowed(int64_t t_ns) const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
   /// min_points: points needed for the ratio from points (min_scale_points, or
   /// arrival_min_scale_points on the final segment).
@@ -176,6 +187,7 @@ class Navigator {
   bool has_command_ = false;
   int64_t last_good_t_ns_ = 0;
   std::optional<int64_t> segment_start_t_ns_;  ///< frame time when the current segment began
+  bool segment_from_switch_ = false;  ///< the current segment began with a switch
   std::optional<int64_t> last_t_ns_;
   // Highest scale ratio with the final image seen on the final segment (arrival_fade_ratio);
   // NaN until measured, reset whenever IN changes (final_ratio_in_: the IN it belongs to).
