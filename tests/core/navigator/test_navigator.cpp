@@ -326,6 +326,9 @@ TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
   o.vnhv.teach_speed_m_s = 0.225;
+  // This tour has 6 key images, so its segments include the turn; the default hands segments
+  // turning > 0.1 rad to IBVS (measured here: final lateral 0.16 m). The law itself is tested.
+  o.vnhv.max_segment_turn_rad = 10.0;
   const ClosedLoopEnd e = drive_closed_loop(o);
   EXPECT_EQ(e.last.command.reason, StopReason::kTourComplete);
   EXPECT_EQ(e.last.telemetry.in, static_cast<int>(tour().map.key_images.size()) - 1);
