@@ -7,6 +7,7 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "evaluation/metrics.hpp"
 
@@ -97,56 +98,77 @@ void move_furniture(YAML::Node root, const std::vector<Eigen::Vector2d>& samples
   }
 }
 
-/// Adds a person walking beside the middle of the taught path; returns false if no free side.
+/// The part of the taught path a person walks beside at `offset` (left > 0), every 5 cm, or
+/// empty when it is not free: each point clear of the world by the person's 0.3 m and at least
+/// 0.9 x |offset| from the whole path.
+std::vector<Eigen::Vector2d> person_walk(const mock::World& world, const Polyline& pl, double s0,
+                                         double s1, double offset) {
+  std::vector<Eigen::Vector2d> walk;
+  for (double s = s0; s <= s1 + 1e-9; s += 0.05) {
+    const Eigen::Vector2d p = pl.at(s);
+    // Direction smoothed over +-0.4 m: the walk rounds the outside of a corner.
+    const Eigen::Vector2d ahead = pl.at(std::min(s + 0.4, pl.length_m()));
+    const Eigen::Vector2d behind = pl.at(std::max(s - 0.4, 0.0));
+    Eigen::Vector2d t = ahead - behind;
+    if (t.norm() < 1e-9) continue;
+    t.normalize();
+    const Eigen::Vector2d q = p + offset * Eigen::Vector2d(-t.y(), t.x());
+    // 0.3 m: the person's half-diagonal (0.45 x 0.3 m) plus a little. On the inside of a turn
+    // the offset curve folds back across the path: every point must stay ~offset away from
+    // the whole path, not only from its own foot point.
+    if (world.collision(q, 0.3, 0.0)) return {};
+    if (pl.project(q).distance_m < 0.9 * std::abs(offset)) return {};
+    walk.push_back(q);
+  }
+  return walk.size() >= 2 ? walk : std::vector<Eigen::Vector2d>{};
+}
+
+/// Adds a person walking beside the taught path; returns false if no free place. Preferred:
+/// the middle 25-65 % of the tour; where that is a corridor too narrow for a person beside the
+/// robot (room_corridor_room), shorter stretches nearer the ends (the rooms).
 bool add_person(YAML::Node root, const mock::World& world,
                 const std::vector<Eigen::Vector2d>& path, const DisturbanceOptions& o,
                 std::vector<std::string>& notes) {
   if (path.size() < 2) return false;
   const Polyline pl(path);
-  const double s0 = 0.25 * pl.length_m(), s1 = 0.65 * pl.length_m();
-  for (double offset : {o.person_offset_m, -o.person_offset_m, 0.85 * o.person_offset_m,
-                        -0.85 * o.person_offset_m, 1.2 * o.person_offset_m,
-                        -1.2 * o.person_offset_m}) {
-    std::vector<Eigen::Vector2d> walk;
-    bool free = true;
-    for (double s = s0; s <= s1 + 1e-9 && free; s += 0.05) {
-      const Eigen::Vector2d p = pl.at(s);
-      // Direction smoothed over +-0.4 m: the walk rounds the outside of a corner.
-      const Eigen::Vector2d ahead = pl.at(std::min(s + 0.4, pl.length_m()));
-      const Eigen::Vector2d behind = pl.at(std::max(s - 0.4, 0.0));
-      Eigen::Vector2d t = ahead - behind;
-      if (t.norm() < 1e-9) continue;
-      t.normalize();
-      const Eigen::Vector2d q = p + offset * Eigen::Vector2d(-t.y(), t.x());
-      // 0.3 m: the person's half-diagonal (0.45 x 0.3 m) plus a little. On the inside of a turn
-      // the offset curve folds back across the path: every point must stay ~offset away from
-      // the whole path, not only from its own foot point.
-      if (world.collision(q, 0.3, 0.0)) free = false;
-      if (pl.project(q).distance_m < 0.9 * std::abs(offset)) free = false;
-      walk.push_back(q);
+  const double len = pl.length_m();
+  // The middle 40 %, then every 20 % stretch (5 % steps), nearest the middle first.
+  std::vector<std::pair<double, double>> windows = {{0.25, 0.65}};
+  std::vector<double> starts;
+  for (int k = 0; k <= 16; ++k) starts.push_back(0.05 * k);
+  std::stable_sort(starts.begin(), starts.end(), [](double a, double b) {
+    return std::abs(a + 0.1 - 0.45) < std::abs(b + 0.1 - 0.45);
+  });
+  for (double a : starts) windows.emplace_back(a, a + 0.2);
+  for (const auto& [f0, f1] : windows) {
+    for (double offset : {o.person_offset_m, -o.person_offset_m, 0.85 * o.person_offset_m,
+                          -0.85 * o.person_offset_m, 1.2 * o.person_offset_m,
+                          -1.2 * o.person_offset_m}) {
+      const double s0 = f0 * len, s1 = f1 * len;
+      const std::vector<Eigen::Vector2d> walk = person_walk(world, pl, s0, s1, offset);
+      if (walk.empty()) continue;
+      // Every 5 cm sample is a vertex: coarser chords would cut the outside of a turn.
+      YAML::Node pts(YAML::NodeType::Sequence);
+      for (const auto& q : walk) pts.push_back(flow_pair(q.x(), q.y()));
+      YAML::Node person;
+      person["name"] = "evaluation_person";
+      person["path"] = pts;
+      person["speed_m_s"] = o.person_speed_m_s;
+      person["texture"] = "evaluation_person";
+      root["textures"]["evaluation_person"]["type"] = "noise";
+      root["textures"]["evaluation_person"]["mean"] = 70;
+      root["textures"]["evaluation_person"]["contrast"] = 30;
+      root["textures"]["evaluation_person"]["feature_px"] = 24;
+      root["textures"]["evaluation_person"]["seed"] = 4242;
+      root["people"].push_back(person);
+      std::ostringstream os;
+      os.precision(2);
+      os << std::fixed << "person walking " << (s1 - s0) << " m beside the path (from "
+         << s0 << " m) at " << (offset > 0 ? "left " : "right ") << std::abs(offset) << " m, "
+         << o.person_speed_m_s << " m/s";
+      notes.push_back(os.str());
+      return true;
     }
-    if (!free || walk.size() < 2) continue;
-    // Every 5 cm sample is a vertex: coarser chords would cut the outside of a turn.
-    YAML::Node pts(YAML::NodeType::Sequence);
-    for (const auto& q : walk) pts.push_back(flow_pair(q.x(), q.y()));
-    YAML::Node person;
-    person["name"] = "evaluation_person";
-    person["path"] = pts;
-    person["speed_m_s"] = o.person_speed_m_s;
-    person["texture"] = "evaluation_person";
-    root["textures"]["evaluation_person"]["type"] = "noise";
-    root["textures"]["evaluation_person"]["mean"] = 70;
-    root["textures"]["evaluation_person"]["contrast"] = 30;
-    root["textures"]["evaluation_person"]["feature_px"] = 24;
-    root["textures"]["evaluation_person"]["seed"] = 4242;
-    root["people"].push_back(person);
-    std::ostringstream os;
-    os.precision(2);
-    os << std::fixed << "person walking " << (s1 - s0) << " m beside the path at "
-       << (offset > 0 ? "left " : "right ") << std::abs(offset) << " m, " << o.person_speed_m_s
-       << " m/s";
-    notes.push_back(os.str());
-    return true;
   }
   notes.push_back("no free side of the path for a walking person: not added");
   return false;

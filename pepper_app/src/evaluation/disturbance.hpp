@@ -42,7 +42,8 @@ struct DisturbanceOptions {
   /// 0.3 m robot radius + 0.15 m margin for replay deviations.
   double min_path_clearance_m = 0.45;
   /// Person: walks back and forth beside the middle part of the taught path (from 25 % to 65 %
-  /// of its length), person_offset_m to its side (the first side/offset that is free), m/s.
+  /// of its length; where that is not free, shorter stretches nearer the ends),
+  /// person_offset_m to its side (the first side/offset that is free), m/s.
   double person_offset_m = 0.8;
   double person_speed_m_s = 0.6;
   /// Frame drops: probability that a captured frame is lost on the WiFi link, [0, 0.9].

@@ -134,6 +134,26 @@ TEST(Disturbances, PersonWalksBesideThePathAndLightScales) {
   EXPECT_THROW(parse_disturbance("rain"), std::invalid_argument);
 }
 
+// room_corridor_room: the middle of the tour is a 2 m corridor with a bench and a bin, too
+// narrow for a person beside the robot, so the person walks in one of the rooms instead; the
+// walk stays clear of the path and of the world.
+TEST(Disturbances, PersonFindsRoomWhereTheMiddleIsANarrowCorridor) {
+  const auto w = std::make_shared<const mock::World>(
+      mock::load_world(std::string(PEPPER_SOURCE_DIR) + "/worlds/room_corridor_room.yaml"));
+  const DisturbedWorld d =
+      make_disturbed_world(w, {Disturbance::kPerson}, {}, w->scenario.waypoints_m, 1);
+  ASSERT_EQ(d.world->people.size(), w->people.size() + 1);
+  ASSERT_FALSE(d.notes.empty());
+  EXPECT_NE(d.notes.back().find("person walking"), std::string::npos) << d.notes.back();
+  const Polyline pl(w->scenario.waypoints_m);
+  const mock::MovingObstacle& p = d.world->people.back();
+  for (double t = 0.0; t < 30.0; t += 0.25) {
+    const Eigen::Vector3d pose = p.pose_at(t);
+    EXPECT_GT(pl.project(pose.head<2>()).distance_m, 0.3 + 0.27) << "t = " << t;
+    EXPECT_FALSE(w->collision(pose.head<2>(), 0.25, 0.0)) << "t = " << t;
+  }
+}
+
 TEST(Output, JsonHasSummaryAndRuns) {
   Evaluation e;
   e.world_name = "w";
