@@ -250,19 +250,18 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
 bool Navigator::blind_switch_allowed(int64_t t_ns) const {
   const double fraction = options_.blind_switch_min_time_fraction;
   if (fraction <= 0.0 || !segment_from_switch_ || !switcher_ || !segment_start_t_ns_) return true;
+  return static_cast<double>(t_ns - *segment_start_t_ns_) >= fraction * segment_taught_ns();
+}
+
+double Navigator::segment_taught_ns() const {
   const localization::Segment& seg = switcher_->segment();
-  const double taught_ns = static_cast<double>(map_.key_images[seg.next].t_ns -
-                                               map_.key_images[seg.prev].t_ns);
-  return static_cast<double>(t_ns - *segment_start_t_ns_) >= fraction * taught_ns;
+  return static_cast<double>(map_.key_images[seg.next].t_ns - map_.key_images[seg.prev].t_ns);
 }
 
 bool Navigator::segment_overdue(int64_t t_ns) const {
   if (options_.segment_overdue_factor <= 0.0 || !switcher_ || !segment_start_t_ns_) return false;
-  const localization::Segment& seg = switcher_->segment();
-  const double taught_ns = static_cast<double>(map_.key_images[seg.next].t_ns -
-                                               map_.key_images[seg.prev].t_ns);
   const double allowed_ns = std::max(static_cast<double>(options_.segment_overdue_min_ns),
-                                     options_.segment_overdue_factor * taught_ns);
+                                     options_.segment_overdue_factor * segment_taught_ns());
   return static_cast<double>(t_ns - *segment_start_t_ns_) > allowed_ns;
 }
 
@@ -378,9 +377,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
         vnhv_model_ = control::build_segment_model(*prev, obs, focal_px, o.pose);
       }
     }
-    const double taught_s =
-        static_cast<double>(map_.key_images[seg.next].t_ns - map_.key_images[seg.prev].t_ns) * 1e-9;
-    vnhv_segment_length_m_ = taught_s * o.teach_speed_m_s;
+    vnhv_segment_length_m_ = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
   } else {
     // The command sent after the previous frame moved the robot until now.
     vnhv_filter_.predict(has_command_ ? last_command_.v_m_s : 0.0,

@@ -163,6 +163,8 @@ class Navigator {
   bool segment_overdue(int64_t t_ns) const;
   /// blind_switch_min_time_fraction: whether a switch without a scale ratio is allowed at t_ns.
   bool blind_switch_allowed(int64_t t_ns) const;
+  /// Teach time between IP and IN of the current segment (map t_ns), ns; needs a segment.
+  double segment_taught_ns() const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
   /// min_points: points needed for the ratio from points (min_scale_points, or
   /// arrival_min_scale_points on the final segment).
