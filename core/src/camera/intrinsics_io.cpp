@@ -235,12 +235,7 @@ CameraIntrinsics load_intrinsics_plain(const std::string& path) {
         throw IntrinsicsFileError(path, std::string("non-numeric key '") + key + "'");
       }
     };
-    k.width_px = static_cast<int>(get("width_px"));
-    k.height_px = static_cast<int>(get("height_px"));
-    k.fx_px = get("fx_px");
-    k.fy_px = get("fy_px");
-    k.cx_px = get("cx_px");
-    k.cy_px = get("cy_px");
+    k = intrinsics_from_keys(get);
   } else {
     throw IntrinsicsFileError(path, "unknown extension '" + ext + "' (expected .yaml, .yml, .json)");
   }

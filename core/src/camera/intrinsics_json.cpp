@@ -17,13 +17,7 @@ CameraIntrinsics intrinsics_from_json(const nlohmann::json& j) {
     }
     return j[key].get<double>();
   };
-  CameraIntrinsics k;
-  k.width_px = static_cast<int>(get("width_px"));
-  k.height_px = static_cast<int>(get("height_px"));
-  k.fx_px = get("fx_px");
-  k.fy_px = get("fy_px");
-  k.cx_px = get("cx_px");
-  k.cy_px = get("cy_px");
+  const CameraIntrinsics k = intrinsics_from_keys(get);
   if (const auto errors = k.validate(); !errors.empty()) throw std::invalid_argument(errors.front());
   return k;
 }

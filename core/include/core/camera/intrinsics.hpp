@@ -47,4 +47,19 @@ struct CameraIntrinsics {
   bool operator==(const CameraIntrinsics&) const = default;
 };
 
+/// The six fields read by their key names in intrinsics files (width_px, height_px, fx_px,
+/// fy_px, cx_px, cy_px) through get(key) -> double, which throws for a missing or non-numeric
+/// key (JSON and YAML readers share this). Not validated.
+template <class Get>
+CameraIntrinsics intrinsics_from_keys(Get&& get) {
+  CameraIntrinsics k;
+  k.width_px = static_cast<int>(get("width_px"));
+  k.height_px = static_cast<int>(get("height_px"));
+  k.fx_px = get("fx_px");
+  k.fy_px = get("fy_px");
+  k.cx_px = get("cx_px");
+  k.cy_px = get("cy_px");
+  return k;
+}
+
 }  // namespace pepper::core
