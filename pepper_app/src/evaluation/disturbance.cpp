@@ -141,10 +141,10 @@ bool add_person(YAML::Node root, const mock::World& world,
   });
   for (double a : starts) windows.emplace_back(a, a + 0.2);
   for (const auto& [f0, f1] : windows) {
+    const double s0 = f0 * len, s1 = f1 * len;
     for (double offset : {o.person_offset_m, -o.person_offset_m, 0.85 * o.person_offset_m,
                           -0.85 * o.person_offset_m, 1.2 * o.person_offset_m,
                           -1.2 * o.person_offset_m}) {
-      const double s0 = f0 * len, s1 = f1 * len;
       const std::vector<Eigen::Vector2d> walk = person_walk(world, pl, s0, s1, offset);
       if (walk.empty()) continue;
       // Every 5 cm sample is a vertex: coarser chords would cut the outside of a turn.
