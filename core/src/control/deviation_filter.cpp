@@ -1,5 +1,6 @@
 #include "core/control/deviation_filter.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>  // Matx inv
 #include <sstream>
@@ -52,8 +53,9 @@ void DeviationFilter::start(const SegmentDeviation& measured, int64_t t_ns) {
   rejections_ = 0;
 }
 
-void DeviationFilter::predict(double v_m_s, double omega_rad_s, int64_t t_ns) {
-  if (!std::isfinite(v_m_s) || !std::isfinite(omega_rad_s)) {
+void DeviationFilter::predict(double v_m_s, double omega_rad_s, int64_t t_ns,
+                              double curvature_1_m) {
+  if (!std::isfinite(v_m_s) || !std::isfinite(omega_rad_s) || !std::isfinite(curvature_1_m)) {
     throw std::invalid_argument("DeviationFilter::predict: non-finite command");
   }
   if (!started_) return;
@@ -62,9 +64,14 @@ void DeviationFilter::predict(double v_m_s, double omega_rad_s, int64_t t_ns) {
                                 " is before the state's " + std::to_string(t_ns_));
   }
   const double dt = static_cast<double>(t_ns - t_ns_) * 1e-9;
-  const double theta_mid = theta_rad_ + 0.5 * omega_rad_s * dt;
+  const double path_rate =
+      curvature_1_m == 0.0 ? 0.0
+                           : curvature_1_m * v_m_s * std::cos(theta_rad_) /
+                                 std::max(0.1, 1.0 - curvature_1_m * y_m_);
+  const double turn_rate = omega_rad_s - path_rate;  // heading change relative to the path
+  const double theta_mid = theta_rad_ + 0.5 * turn_rate * dt;
   y_m_ += v_m_s * std::sin(theta_mid) * dt;
-  theta_rad_ = wrap_angle_rad(theta_rad_ + omega_rad_s * dt);
+  theta_rad_ = wrap_angle_rad(theta_rad_ + turn_rate * dt);
   const cv::Matx22d F(1.0, v_m_s * std::cos(theta_mid) * dt, 0.0, 1.0);
   const double qy = options_.process_sigma_m, qt = options_.process_sigma_rad;
   P_ = F * P_ * F.t() + cv::Matx22d(qy * qy * dt, 0.0, 0.0, qt * qt * dt);

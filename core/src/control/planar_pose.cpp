@@ -48,4 +48,29 @@ std::optional<SegmentDeviation> deviation_from_segment(const PlanarPose& prev_in
   return dev;
 }
 
+double arc_curvature(const PlanarPose& prev_in_next) {
+  const double chord = std::hypot(prev_in_next.x_m, prev_in_next.y_m);
+  if (!(chord > 1e-12)) return 0.0;
+  return -2.0 * std::sin(0.5 * prev_in_next.yaw_rad) / chord;
+}
+
+std::optional<SegmentDeviation> deviation_from_arc(const PlanarPose& prev_in_next,
+                                                   const PlanarPose& current_in_next) {
+  const double chord = std::hypot(prev_in_next.x_m, prev_in_next.y_m);
+  if (!(chord > 1e-12)) return std::nullopt;
+  const double kappa = arc_curvature(prev_in_next);
+  if (!(std::abs(kappa) * chord >= 1e-6)) return deviation_from_segment(prev_in_next, current_in_next);
+  // Centre (0, 1/kappa); the arc runs counter-clockwise about it for kappa > 0.
+  const double cy = 1.0 / kappa;
+  const double rx = current_in_next.x_m, ry = current_in_next.y_m - cy;
+  const double d = std::hypot(rx, ry);
+  if (!(d > 1e-12)) return std::nullopt;
+  const double sign = kappa > 0.0 ? 1.0 : -1.0;
+  SegmentDeviation dev;
+  dev.lateral_m = cy - sign * d;  // inside the turn is left for kappa > 0, right otherwise
+  const double tangent = std::atan2(ry, rx) + sign * 0.5 * std::numbers::pi;
+  dev.heading_rad = wrap_angle_rad(current_in_next.yaw_rad - tangent);
+  return dev;
+}
+
 }  // namespace pepper::core::control

@@ -373,15 +373,27 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
       const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);
-      if (prev && std::abs(prev->yaw_rad) <= o.max_segment_turn_rad) {
+      const double turn_rad = prev ? std::abs(prev->yaw_rad) : 0.0;
+      if (prev && (turn_rad <= o.max_segment_turn_rad || turn_rad <= o.max_arc_turn_rad)) {
         vnhv_model_ = control::build_segment_model(*prev, obs, focal_px, o.pose);
       }
     }
     vnhv_segment_length_m_ = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
+    vnhv_curvature_1_m_ = 0.0;
+    if (vnhv_model_ && std::abs(vnhv_model_->prev_in_next.yaw_rad) > o.max_segment_turn_rad) {
+      // A turning segment follows its arc. The taught duration gives the arc's length: metres
+      // per segment unit = length / (turn / |kappa in units|).
+      const control::PlanarPose& p = vnhv_model_->prev_in_next;
+      const double kappa_unit = control::arc_curvature(p);
+      const double arc_units = std::abs(p.yaw_rad) / std::abs(kappa_unit);
+      vnhv_segment_length_m_ /= arc_units;  // now metres per unit
+      vnhv_curvature_1_m_ = kappa_unit / vnhv_segment_length_m_;
+    }
   } else {
     // The command sent after the previous frame moved the robot until now.
     vnhv_filter_.predict(has_command_ ? last_command_.v_m_s : 0.0,
-                         has_command_ ? last_command_.omega_rad_s : 0.0, tel.t_ns);
+                         has_command_ ? last_command_.omega_rad_s : 0.0, tel.t_ns,
+                         vnhv_curvature_1_m_);
   }
   if (!vnhv_model_) return std::nullopt;
   const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
@@ -389,8 +401,11 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   if (const auto fix =
           control::locate_in_segment(*vnhv_model_, corner_observations(tv_n), focal_px, o.pose)) {
     const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
-    past_next = prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
-    if (auto dev = control::deviation_from_segment(prev, fix->pose)) {
+    const bool arc = vnhv_curvature_1_m_ != 0.0;
+    // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
+    past_next = arc ? fix->pose.x_m > 0.0 : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
+    if (auto dev = arc ? control::deviation_from_arc(prev, fix->pose)
+                       : control::deviation_from_segment(prev, fix->pose)) {
       dev->lateral_m *= vnhv_segment_length_m_;  // segment units -> m
       vnhv_filter_.correct(*dev, tel.t_ns);
     }
@@ -405,7 +420,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   // hit a desk.
   if (past_next) return std::nullopt;
   const double v = has_command_ ? last_command_.v_m_s : options_.schedule.v_straight_m_s;
-  return control::vnhv_omega(v, est->lateral_m, est->heading_rad, o);
+  return control::vnhv_omega(v, est->lateral_m, est->heading_rad, o, vnhv_curvature_1_m_);
 }
 
 StepResult Navigator::step(const Frame& frame) {

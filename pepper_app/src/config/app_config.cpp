@@ -130,6 +130,7 @@ template <class V> void visit(V& v, cc::VnhvOptions& o) {
   v("max_abs_theta_rad", o.max_abs_theta_rad);
   v("teach_speed_m_s", o.teach_speed_m_s);
   v("max_segment_turn_rad", o.max_segment_turn_rad);
+  v("max_arc_turn_rad", o.max_arc_turn_rad);
   v.group("pose", [&](V& s) {
     s("min_parallax_rad", o.pose.min_parallax_rad);
     s("max_reprojection_px", o.pose.max_reprojection_px);

@@ -45,6 +45,28 @@ TEST(DeviationFilter, PredictionIntegratesTheUnicycle) {
   EXPECT_NEAR(e->lateral_m, 0.2 / -0.4 * (std::cos(0.2) - std::cos(0.0)), 1e-9);
 }
 
+TEST(DeviationFilter, PredictionAlongACurvedPath) {
+  // Following a left arc of curvature 0.5 /m exactly (omega = kappa v): no change relative to it.
+  DeviationFilter f;
+  f.correct({0.0, 0.0}, 0);
+  int64_t t = 0;
+  for (int i = 0; i < 10; ++i) f.predict(0.2, 0.1, t += kFrameNs, 0.5);
+  auto e = f.estimate(t);
+  ASSERT_TRUE(e);
+  EXPECT_NEAR(e->lateral_m, 0.0, 1e-12);
+  EXPECT_NEAR(e->heading_rad, 0.0, 1e-12);
+  // Driving straight while the path turns left: the heading relative to it falls at kappa v
+  // (first step exact: theta = 0, y = 0).
+  DeviationFilter g;
+  g.correct({0.0, 0.0}, 0);
+  g.predict(0.2, 0.0, kFrameNs, 0.5);
+  e = g.estimate(kFrameNs);
+  ASSERT_TRUE(e);
+  EXPECT_NEAR(e->heading_rad, -0.1 * kFrameNs * 1e-9, 1e-12);
+  EXPECT_LT(e->lateral_m, 0.0);  // drifting outside (right of) the left turn
+  EXPECT_THROW(g.predict(0.2, 0.0, 2 * kFrameNs, std::nan("")), std::invalid_argument);
+}
+
 // A robot drives with a known command sequence; the measurements are the truth plus noise of
 // the filter's assumed sigma. The filtered estimate must be closer to the truth than they are.
 TEST(DeviationFilter, ReducesMeasurementNoiseOnASimulatedDrive) {

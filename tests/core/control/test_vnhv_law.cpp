@@ -11,7 +11,9 @@ namespace pepper::core::control {
 namespace {
 
 TEST(VnhvLaw, HandComputedCases) {
-  const VnhvOptions o;  // Kp = 4, Kd = 4
+  VnhvOptions o;
+  o.kp_1_m2 = 4.0;
+  o.kd_1_m = 4.0;
   // On the path: no rotation.
   EXPECT_DOUBLE_EQ(*vnhv_omega(0.15, 0.0, 0.0, o), 0.0);
   // Left of the path, parallel: -V Kp y = -0.15 * 4 * 0.1 = -0.06 (turn right, towards it).
@@ -60,14 +62,16 @@ TEST(VnhvLaw, ConvergesWithSettlingDistanceIndependentOfSpeed) {
     // Same trajectory as a function of distance (chained form): only integration error differs.
     ASSERT_NEAR(slow[i].y, fast[i].y, 1e-9);
   }
-  EXPECT_LT(std::abs(slow.back().y), 0.002);  // 4 m = ~10 time constants of 1/2 m
+  EXPECT_LT(std::abs(slow.back().y), 0.002);  // 4 m = 8 time constants of 1/2 m
   EXPECT_LT(std::abs(slow.back().theta), 0.005);
 }
 
 TEST(VnhvLaw, LinearisationIsCriticallyDampedSecondOrder) {
   // Small deviations: y(s) follows y'' + Kd y' + Kp y = 0; with Kp = 4, Kd = 4 (double root -2):
   // y(s) = (y0 + (y0' + 2 y0) s) e^{-2 s}, y0' = tan(theta0).
-  const VnhvOptions o;
+  VnhvOptions o;
+  o.kp_1_m2 = 4.0;
+  o.kd_1_m = 4.0;
   const double y0 = 1e-3, th0 = 0.0;
   const auto traj = simulate(0.15, {y0, th0}, 2.0, o);
   for (size_t i = 0; i < traj.size(); i += 50) {
@@ -123,6 +127,74 @@ TEST(VnhvGeometry, DeviationFromSegment) {
   EXPECT_NEAR(dev->lateral_m, std::sqrt(0.5), 1e-15);
   EXPECT_NEAR(dev->heading_rad, 0.1, 1e-15);
   EXPECT_FALSE(deviation_from_segment({0.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}));
+}
+
+// A point of the arc that ends at IN (origin, heading +x) about the centre (0, 1/kappa), at
+// heading h (h = 0 at IN).
+PlanarPose on_arc(double kappa, double h, double inward_m = 0.0) {
+  const double r = 1.0 / kappa;  // signed
+  const double rr = r - inward_m * (kappa > 0 ? 1.0 : -1.0);  // smaller radius inside
+  return {rr * std::sin(h), r - rr * std::cos(h), h};
+}
+
+TEST(VnhvGeometry, DeviationFromArc) {
+  for (const double kappa : {0.5, -0.5, 2.0}) {
+    SCOPED_TRACE(kappa);
+    const double turn = 0.6 * (kappa > 0 ? 1.0 : -1.0);  // heading change from IP to IN
+    const PlanarPose prev = on_arc(kappa, -turn);
+    EXPECT_NEAR(arc_curvature(prev), kappa, 1e-12);
+    // On the arc, halfway, heading along it: no deviation.
+    auto dev = deviation_from_arc(prev, on_arc(kappa, -turn / 2));
+    ASSERT_TRUE(dev);
+    EXPECT_NEAR(dev->lateral_m, 0.0, 1e-12);
+    EXPECT_NEAR(dev->heading_rad, 0.0, 1e-12);
+    // 0.1 inside the turn (left of the path for a left turn), heading 0.05 rad left of it.
+    PlanarPose in = on_arc(kappa, -turn / 3, 0.1);
+    in.yaw_rad += 0.05;
+    dev = deviation_from_arc(prev, in);
+    ASSERT_TRUE(dev);
+    EXPECT_NEAR(dev->lateral_m, kappa > 0 ? 0.1 : -0.1, 1e-12);
+    EXPECT_NEAR(dev->heading_rad, 0.05, 1e-12);
+  }
+  // Straight "arc": the chord's deviation.
+  const auto straight = deviation_from_arc({-1.0, 0.0, 0.0}, {-0.5, 0.1, 0.2});
+  ASSERT_TRUE(straight);
+  EXPECT_NEAR(straight->lateral_m, 0.1, 1e-15);
+  EXPECT_NEAR(straight->heading_rad, 0.2, 1e-15);
+  EXPECT_DOUBLE_EQ(arc_curvature({-1.0, 0.0, 0.0}), 0.0);
+  EXPECT_FALSE(deviation_from_arc({0.0, 0.0, 0.3}, {-1.0, 0.0, 0.0}));
+}
+
+// Path coordinates on a circle of curvature kappa (Samson): y' = V sin(theta),
+// theta' = omega - kappa V cos(theta) / (1 - kappa y); omega from the law with the curvature
+// fed forward (ff) or not. Euler, 1 mm steps.
+State follow_circle(double kappa, bool ff, State s, double distance_m) {
+  const VnhvOptions o;
+  const double v = 0.15, dt = 0.001 / v;
+  for (int i = 0; i < static_cast<int>(distance_m / 0.001); ++i) {
+    const double omega = *vnhv_omega(v, s.y, s.theta, o, ff ? kappa : 0.0);
+    const double path = kappa * v * std::cos(s.theta) / (1.0 - kappa * s.y);
+    s.y += v * std::sin(s.theta) * dt;
+    s.theta += (omega - path) * dt;
+  }
+  return s;
+}
+
+TEST(VnhvLaw, CurvatureFeedForwardFollowsAnArc) {
+  // A 1 m radius turn, starting 0.1 m outside: with the feed-forward the offset decays as on a
+  // straight line; without it the robot settles at y = -kappa / Kp = -0.25 m (Kp = 4: it needs
+  // a steady error to turn at kappa V).
+  const State with = follow_circle(1.0, true, {-0.1, 0.0}, 4.0);
+  EXPECT_LT(std::abs(with.y), 0.003);
+  EXPECT_LT(std::abs(with.theta), 0.01);
+  const State without = follow_circle(1.0, false, {-0.1, 0.0}, 4.0);
+  EXPECT_GT(std::abs(without.y), 0.15);
+  // On the arc: exactly the path's turn rate.
+  const VnhvOptions o;
+  EXPECT_NEAR(*vnhv_omega(0.15, 0.0, 0.0, o, -0.8), -0.12, 1e-15);
+  // At or beyond the centre of the turn: no command.
+  EXPECT_FALSE(vnhv_omega(0.15, 1.0, 0.0, o, 1.0));
+  EXPECT_THROW(vnhv_omega(0.15, 0.0, 0.0, o, std::nan("")), std::invalid_argument);
 }
 
 TEST(VnhvLaw, ValidateNamesBadFields) {

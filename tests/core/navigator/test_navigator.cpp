@@ -320,14 +320,14 @@ TEST(Navigator, ClosedLoopFollowsTheTourAndStopsAtTheEnd) {
 
 // The same drive with the VNHV controller (teach speed of this tour: 0.225 m/s). It must use
 // its own estimate, not only the IBVS fallback, and end closer laterally: measured along
-// -0.004 m, lateral -0.057 m, yaw 0.050 rad, 168 frames with an estimate (docs/method/
-// control.md); the bounds leave margin.
+// -0.004 m, lateral -0.057 m, yaw 0.050 rad, 168 frames with an estimate (with Kp 9, Kd 6:
+// 0.003, -0.033, 0.035, 174); the bounds leave margin.
 TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
   o.vnhv.teach_speed_m_s = 0.225;
   // This tour has 6 key images, so its segments include the turn; the default hands segments
-  // turning > 0.1 rad to IBVS (measured here: final lateral 0.16 m). The law itself is tested.
+  // turning > 0.1 rad to IBVS, or to their arcs (next test). The chord law is tested here.
   o.vnhv.max_segment_turn_rad = 10.0;
   const ClosedLoopEnd e = drive_closed_loop(o);
   EXPECT_EQ(e.last.command.reason, StopReason::kTourComplete);
@@ -337,6 +337,29 @@ TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
   EXPECT_LT(std::abs(e.along_m), 0.30) << "along " << e.along_m;
   EXPECT_LT(std::abs(e.lateral_m), 0.15) << "lateral " << e.lateral_m;
   EXPECT_LT(std::abs(e.yaw_err_rad), 0.15);
+}
+
+// VNHV with arcs (VnhvOptions::max_arc_turn_rad = 1, Kp 9, Kd 6): straight segments on their
+// chord, the turning ones on their taught arc, curvature fed forward. Measured here: along -0.020 m,
+// lateral 0.008 m, yaw -0.006 rad, 168 frames with an estimate; with IBVS on the turning
+// segments (max_arc_turn_rad = 0) the end was 0.098 m off laterally, yaw -0.088 rad.
+TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
+  NavigatorOptions o;
+  o.controller = ControllerKind::kVnhv;
+  o.vnhv.teach_speed_m_s = 0.225;
+  o.vnhv.max_arc_turn_rad = 1.0;
+  o.vnhv.kp_1_m2 = 9.0;
+  o.vnhv.kd_1_m = 6.0;
+  const ClosedLoopEnd e = drive_closed_loop(o);
+  o.vnhv.max_arc_turn_rad = 0.0;
+  const ClosedLoopEnd ibvs_turns = drive_closed_loop(o);
+  EXPECT_EQ(e.last.command.reason, StopReason::kTourComplete);
+  EXPECT_EQ(e.last.telemetry.in, static_cast<int>(tour().map.key_images.size()) - 1);
+  EXPECT_GT(e.vnhv_frames, 100) << "VNHV rarely had an estimate";
+  EXPECT_LT(std::abs(e.along_m), 0.30) << "along " << e.along_m;
+  EXPECT_LT(std::abs(e.lateral_m), 0.05) << "lateral " << e.lateral_m;
+  EXPECT_LT(std::abs(e.yaw_err_rad), 0.05);
+  EXPECT_LT(std::abs(e.lateral_m), std::abs(ibvs_turns.lateral_m)) << "the arcs did not help";
 }
 
 }  // namespace

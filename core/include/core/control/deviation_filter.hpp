@@ -44,7 +44,9 @@ class DeviationFilter {
   /// Advance the state to t_ns with the command applied since the last call (no-op before the
   /// first measurement). Throws std::invalid_argument when t_ns goes back or inputs are not
   /// finite.
-  void predict(double v_m_s, double omega_rad_s, int64_t t_ns);
+  /// With a curved reference (curvature_1_m, > 0 left) the path's own turn is subtracted:
+  /// theta' = omega - kappa v cos(theta) / (1 - kappa y) (1 - kappa y clamped at 0.1).
+  void predict(double v_m_s, double omega_rad_s, int64_t t_ns, double curvature_1_m = 0.0);
   /// Fuse a measurement taken at t_ns (call predict(.., t_ns) first once started).
   Correction correct(const SegmentDeviation& measured, int64_t t_ns);
   /// The current estimate at t_ns (see file comment for nullopt).

@@ -39,6 +39,19 @@ struct SegmentDeviation {
 std::optional<SegmentDeviation> deviation_from_segment(const PlanarPose& prev_in_next,
                                                        const PlanarPose& current_in_next);
 
+/// The taught path of a turning segment under the arc model (segment_pose.hpp): the circular
+/// arc that leaves prev with prev's heading and ends at IN (the origin) heading along +x.
+/// Curvature in 1/(length unit), > 0 for a left turn: kappa = -2 sin(yaw_prev / 2) / |prev|
+/// (the centre is at (0, 1 / kappa)); 0 when prev coincides with IN.
+double arc_curvature(const PlanarPose& prev_in_next);
+
+/// Deviation of the current pose from that arc (lateral > 0 left of the arc seen along the
+/// direction of travel, heading relative to the arc's tangent at the nearest point). Falls back
+/// to deviation_from_segment when the arc is (almost) straight (|kappa| |prev| < 1e-6). Returns
+/// nullopt when prev coincides with IN or the pose is at the arc's centre.
+std::optional<SegmentDeviation> deviation_from_arc(const PlanarPose& prev_in_next,
+                                                   const PlanarPose& current_in_next);
+
 double wrap_angle_rad(double angle_rad);
 
 }  // namespace pepper::core::control

@@ -31,8 +31,13 @@
 namespace pepper::core::control {
 
 struct VnhvOptions {
-  double kp_1_m2 = 4.0;  ///< Kp, 1/m^2, > 0: natural "frequency" in distance sqrt(Kp) = 2 /m
-  double kd_1_m = 4.0;   ///< Kd, 1/m, > 0: 2 sqrt(Kp) = critically damped (settles in ~2.4 m)
+  /// Kp, 1/m^2, > 0: natural "frequency" in distance sqrt(Kp) = 2 /m. With the turning
+  /// segments on their arcs (max_arc_turn_rad) use 9 and Kd 6: in robotics_room's corners the
+  /// robot entered each arc 0.2-0.3 rad off its tangent and 4 / 4 left it 13 cm outside (VGA,
+  /// seed 1, runs 1 3 9: lateral RMS 5.2 cm, max 13.0; with 9 / 6: 3.6 / 9.0;
+  /// docs/method/control.md "Turns").
+  double kp_1_m2 = 4.0;
+  double kd_1_m = 4.0;  ///< Kd, 1/m, > 0: 2 sqrt(Kp) = critically damped (settles in ~2.4 m)
   double max_abs_theta_rad = 1.2;  ///< validity bound on |theta|, in (0, pi/2)
   /// Forward speed of the teach drive, m/s, > 0: the metric length of a segment is its taught
   /// duration (key image t_ns) times this (the map stores no odometry). The mock worlds teach at
@@ -45,14 +50,26 @@ struct VnhvOptions {
   /// (16.4-17.0 m); with 0.1 rad all three complete (lateral RMS 6.9-7.8 cm). rad, > 0 (large:
   /// VNHV on every segment it can model).
   double max_segment_turn_rad = 0.1;
+  /// Segments turning by more than max_segment_turn_rad and at most this follow the arc model's
+  /// circular arc (deviation from the arc, curvature fed forward) instead of going to IBVS;
+  /// 0: IBVS drives every turning segment. rad, >= 0. Off by default: with 1.0 (and Kp 9, Kd 6)
+  /// room_corridor_room's maxima fall from 19-23 cm to 8.5-13.7 cm, but runs were lost at its
+  /// lab doorway, whose turn is cut into 0.07-0.18 m segments, in the only 10-start evaluation
+  /// so far (taken with a tracker experiment; docs/method/control.md "Turns").
+  double max_arc_turn_rad = 0.0;
   SegmentPoseOptions pose;
   DeviationFilterOptions filter;
 
   std::vector<std::string> validate() const;
 };
 
-/// The law above. Throws std::invalid_argument for invalid options or non-finite inputs.
+/// The law above. With a curved reference path (curvature_1_m != 0, > 0 turning left; the
+/// deviation is then measured from the arc, planar_pose.hpp deviation_from_arc) the path's own
+/// turn rate is fed forward: omega += kappa v cos(theta) / (1 - kappa y) (Samson's path
+/// coordinates: theta' = omega - kappa s', s' = v cos(theta) / (1 - kappa y)); nullopt when
+/// 1 - kappa y <= 0.1 (at or beyond the centre of the turn). Throws std::invalid_argument for
+/// invalid options or non-finite inputs.
 std::optional<double> vnhv_omega(double v_m_s, double lateral_m, double heading_rad,
-                                 const VnhvOptions& options);
+                                 const VnhvOptions& options, double curvature_1_m = 0.0);
 
 }  // namespace pepper::core::control

@@ -200,6 +200,7 @@ class Navigator {
   int vnhv_segment_next_ = -1;
   std::optional<control::SegmentModel> vnhv_model_;
   double vnhv_segment_length_m_ = 0.0;
+  double vnhv_curvature_1_m_ = 0.0;  ///< the segment's taught arc; 0: the chord IP -> IN
   control::DeviationFilter vnhv_filter_;
   // Speed: the verified point matches of the previous frame per key image of the segment, the
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
