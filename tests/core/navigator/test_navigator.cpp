@@ -320,8 +320,8 @@ TEST(Navigator, ClosedLoopFollowsTheTourAndStopsAtTheEnd) {
 
 // The same drive with the VNHV controller (teach speed of this tour: 0.225 m/s). It must use
 // its own estimate, not only the IBVS fallback, and end closer laterally: measured along
-// -0.004 m, lateral -0.057 m, yaw 0.050 rad, 168 frames with an estimate (with Kp 9, Kd 6:
-// 0.003, -0.033, 0.035, 174); the bounds leave margin.
+// 0.003 m, lateral -0.033 m, yaw 0.035 rad, 174 frames with an estimate (Kp 9, Kd 6; with
+// Kp 4, Kd 4: -0.004, -0.057, 0.050, 168); the bounds leave margin.
 TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
@@ -339,7 +339,7 @@ TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
   EXPECT_LT(std::abs(e.yaw_err_rad), 0.15);
 }
 
-// VNHV with arcs (VnhvOptions::max_arc_turn_rad = 1, Kp 9, Kd 6): straight segments on their
+// The default VNHV (VnhvOptions::max_arc_turn_rad = 1, Kp 9, Kd 6): straight segments on their
 // chord, the turning ones on their taught arc, curvature fed forward. Measured here: along -0.020 m,
 // lateral 0.008 m, yaw -0.006 rad, 168 frames with an estimate; with IBVS on the turning
 // segments (max_arc_turn_rad = 0) the end was 0.098 m off laterally, yaw -0.088 rad.

@@ -31,13 +31,13 @@
 namespace pepper::core::control {
 
 struct VnhvOptions {
-  /// Kp, 1/m^2, > 0: natural "frequency" in distance sqrt(Kp) = 2 /m. With the turning
-  /// segments on their arcs (max_arc_turn_rad) use 9 and Kd 6: in robotics_room's corners the
+  /// Kp, 1/m^2, > 0: natural "frequency" in distance sqrt(Kp) = 3 /m. Why not 4 (2 /m): with
+  /// the turning segments on their arcs (max_arc_turn_rad), in robotics_room's corners the
   /// robot entered each arc 0.2-0.3 rad off its tangent and 4 / 4 left it 13 cm outside (VGA,
   /// seed 1, runs 1 3 9: lateral RMS 5.2 cm, max 13.0; with 9 / 6: 3.6 / 9.0;
   /// docs/method/control.md "Turns").
-  double kp_1_m2 = 4.0;
-  double kd_1_m = 4.0;  ///< Kd, 1/m, > 0: 2 sqrt(Kp) = critically damped (settles in ~2.4 m)
+  double kp_1_m2 = 9.0;
+  double kd_1_m = 6.0;  ///< Kd, 1/m, > 0: 2 sqrt(Kp) = critically damped (settles in ~1.6 m)
   double max_abs_theta_rad = 1.2;  ///< validity bound on |theta|, in (0, pi/2)
   /// Forward speed of the teach drive, m/s, > 0: the metric length of a segment is its taught
   /// duration (key image t_ns) times this (the map stores no odometry). The mock worlds teach at
@@ -52,11 +52,10 @@ struct VnhvOptions {
   double max_segment_turn_rad = 0.1;
   /// Segments turning by more than max_segment_turn_rad and at most this follow the arc model's
   /// circular arc (deviation from the arc, curvature fed forward) instead of going to IBVS;
-  /// 0: IBVS drives every turning segment. rad, >= 0. Off by default: with 1.0 (and Kp 9, Kd 6)
-  /// room_corridor_room's maxima fall from 19-23 cm to 8.5-13.7 cm, but runs were lost at its
-  /// lab doorway, whose turn is cut into 0.07-0.18 m segments, in the only 10-start evaluation
-  /// so far (taken with a tracker experiment; docs/method/control.md "Turns").
-  double max_arc_turn_rad = 0.0;
+  /// 0: IBVS drives every turning segment. rad, >= 0. Measured (VGA, seed 1, 10 starts, VNHV):
+  /// room_corridor_room 10/10 at lateral RMS 2.8 cm, max 11.8 (0 and Kp 4, Kd 4: 6.5 / 23.0);
+  /// robotics_room 10/10, 3.5 / 10.8 (3.4 / 9.8); README "Closed-loop evaluation".
+  double max_arc_turn_rad = 1.0;
   SegmentPoseOptions pose;
   DeviationFilterOptions filter;
 
