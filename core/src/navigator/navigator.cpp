@@ -1,5 +1,6 @@
 #include "core/navigator/navigator.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -374,11 +375,12 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
       const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);
       const double turn_rad = prev ? std::abs(prev->yaw_rad) : 0.0;
-      if (prev && (turn_rad <= o.max_segment_turn_rad || turn_rad <= o.max_arc_turn_rad)) {
+      if (prev && turn_rad <= std::max(o.max_segment_turn_rad, o.max_arc_turn_rad)) {
         vnhv_model_ = control::build_segment_model(*prev, obs, focal_px, o.pose);
       }
     }
-    vnhv_segment_length_m_ = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
+    // One segment unit is the chord IP -> IN; a straight segment's taught length is its chord.
+    vnhv_m_per_unit_ = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
     vnhv_curvature_1_m_ = 0.0;
     if (vnhv_model_ && std::abs(vnhv_model_->prev_in_next.yaw_rad) > o.max_segment_turn_rad) {
       // A turning segment follows its arc. The taught duration gives the arc's length: metres
@@ -386,8 +388,8 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       const control::PlanarPose& p = vnhv_model_->prev_in_next;
       const double kappa_unit = control::arc_curvature(p);
       const double arc_units = std::abs(p.yaw_rad) / std::abs(kappa_unit);
-      vnhv_segment_length_m_ /= arc_units;  // now metres per unit
-      vnhv_curvature_1_m_ = kappa_unit / vnhv_segment_length_m_;
+      vnhv_m_per_unit_ /= arc_units;
+      vnhv_curvature_1_m_ = kappa_unit / vnhv_m_per_unit_;
     }
   } else {
     // The command sent after the previous frame moved the robot until now.
@@ -403,10 +405,11 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
     const bool arc = vnhv_curvature_1_m_ != 0.0;
     // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
-    past_next = arc ? fix->pose.x_m > 0.0 : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
+    past_next = arc ? fix->pose.x_m > 0.0
+                    : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
     if (auto dev = arc ? control::deviation_from_arc(prev, fix->pose)
                        : control::deviation_from_segment(prev, fix->pose)) {
-      dev->lateral_m *= vnhv_segment_length_m_;  // segment units -> m
+      dev->lateral_m *= vnhv_m_per_unit_;  // segment units -> m
       vnhv_filter_.correct(*dev, tel.t_ns);
     }
   }

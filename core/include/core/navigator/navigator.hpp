@@ -199,7 +199,7 @@ class Navigator {
   // starts; nullopt when that failed: IBVS drives), its metric length, the deviation filter.
   int vnhv_segment_next_ = -1;
   std::optional<control::SegmentModel> vnhv_model_;
-  double vnhv_segment_length_m_ = 0.0;
+  double vnhv_m_per_unit_ = 0.0;  ///< metres per segment unit (the chord IP -> IN)
   double vnhv_curvature_1_m_ = 0.0;  ///< the segment's taught arc; 0: the chord IP -> IN
   control::DeviationFilter vnhv_filter_;
   // Speed: the verified point matches of the previous frame per key image of the segment, the
