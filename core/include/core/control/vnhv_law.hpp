@@ -13,8 +13,8 @@
 //
 // Deviations (navigator): the current camera is located in the segment's own reconstruction
 // (segment_pose.hpp: IP, IN and the current image share one scale, the segment unit |IP - IN|),
-// the lateral offset in segment units times a metric segment length (taught time IP -> IN times
-// teach_speed_m_s) is y; (y, theta) are filtered with the robot's commands
+// the lateral offset in segment units times the metres per unit (taught time IP -> IN times
+// teach_speed_m_s is the chord's length, or the arc's on a turning segment) is y; (y, theta) are filtered with the robot's commands
 // (deviation_filter.hpp). A scale error in the segment length only changes the effective Kp.
 //
 // Pure functions, thread-safe. vnhv_omega returns nullopt when |theta| >= max_abs_theta_rad (the
@@ -44,8 +44,8 @@ struct VnhvOptions {
   /// 0.2-0.25 m/s.
   double teach_speed_m_s = 0.2;
   /// Segments whose taught heading change (the arc model's |yaw of IP in IN's frame|) exceeds
-  /// this are driven by IBVS: the chord of a turning segment is a poor reference for the path,
-  /// and IBVS looks ahead at INN. Measured (room_corridor_room, VGA, seed 1, runs 1, 3, 4 of
+  /// this are "turning": they follow their arc (max_arc_turn_rad) or, beyond that or with it
+  /// 0, are driven by IBVS. The chord of a turning segment is a poor reference. Measured (room_corridor_room, VGA, seed 1, runs 1, 3, 4 of
   /// 10): with VNHV on every segment it can model all three hit the wall at the lab doorway
   /// (16.4-17.0 m); with 0.1 rad all three complete (lateral RMS 6.9-7.8 cm). rad, > 0 (large:
   /// VNHV on every segment it can model).

@@ -196,7 +196,8 @@ class Navigator {
   double final_best_ratio_ = std::numeric_limits<double>::quiet_NaN();
   int final_ratio_in_ = -1;
   // VNHV, per segment (IN = vnhv_segment_next_): its reconstruction (built when the segment
-  // starts; nullopt when that failed: IBVS drives), its metric length, the deviation filter.
+  // starts; nullopt when that failed: IBVS drives), its metric scale and taught curvature, the
+  // deviation filter.
   int vnhv_segment_next_ = -1;
   std::optional<control::SegmentModel> vnhv_model_;
   double vnhv_m_per_unit_ = 0.0;  ///< metres per segment unit (the chord IP -> IN)
