@@ -404,6 +404,9 @@ std::vector<std::string> MatcherOptions::validate() const {
     e.push_back("orb_ratio = " + std::to_string(orb_ratio) + " must be in (0, 1]");
   if (!(orb_max_hamming >= 0 && orb_max_hamming <= 256))
     e.push_back("orb_max_hamming = " + std::to_string(orb_max_hamming) + " must be in [0, 256]");
+  if (orb_fallback_below_points < 0)
+    e.push_back("orb_fallback_below_points = " + std::to_string(orb_fallback_below_points) +
+                " must be >= 0");
   return e;
 }
 
@@ -616,7 +619,19 @@ const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
-  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p)).first->second;
+  TwoViewMatches r = match_two_view(key, current_, options_, p);
+  if (r.n_points() < options_.orb_fallback_below_points && !key.keypoints.empty() &&
+      !current_.keypoints.empty()) {
+    TwoViewMatches w = match_wide_baseline(key, current_, options_);
+    if (w.n_points() > r.n_points()) {
+      r.points = std::move(w.points);
+      r.point_candidates = w.point_candidates;
+      r.essential_found = w.essential_found;
+      r.E_b_a = w.E_b_a;
+      r.points_from_orb = true;
+    }
+  }
+  return two_view_.emplace(key_id, std::move(r)).first->second;
 }
 
 const TwoViewMatches* FrameMatcher::computed_two_view(int64_t key_id) const {

@@ -111,6 +111,7 @@ template <class V> void visit(V& v, cf::MatcherOptions& o) {
   v("klt_shift_from_lines", o.klt_shift_from_lines);
   v("orb_ratio", o.orb_ratio);
   v("orb_max_hamming", o.orb_max_hamming);
+  v("orb_fallback_below_points", o.orb_fallback_below_points);
 }
 template <class V> void visit(V& v, cm::KeyImageSelectorOptions& o) {
   v("epsilon", o.epsilon);

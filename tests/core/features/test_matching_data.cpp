@@ -78,6 +78,41 @@ TEST_F(VispSequenceData, ConsecutiveFramesVerifyOverThreeViews) {
   EXPECT_GT(fm.wide_baseline(0, f0).n_points(), 20);
 }
 
+// The light halved between a key image and the current one: KLT's patch error rejects most
+// tracks, ORB (intensity comparisons within a patch) keeps matching. With
+// orb_fallback_below_points above KLT's count, FrameMatcher::two_view returns the ORB points
+// (flagged: their idx_a are keypoints); below it, KLT's, unflagged.
+// Measured (frames 0 and 1 of mbt/cube, frame 1 x0.5): KLT 0 points, ORB 165.
+TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
+  const FeatureExtractor ex(cube_camera());
+  const ImageFeatures key = load(ex, cube_frame(0));
+  cv::Mat dim;
+  to_gray(cv::imread(cube_frame(1), cv::IMREAD_UNCHANGED)).convertTo(dim, CV_8U, 0.5);
+  const ImageFeatures current = ex.extract(dim);
+  const ImageFeatures bright = load(ex, cube_frame(1));
+
+  FrameMatcher klt_only(current);
+  const TwoViewMatches& k = klt_only.two_view(0, key);
+  MatcherOptions o;
+  o.orb_fallback_below_points = 1000;
+  FrameMatcher with_orb(current, o);
+  const TwoViewMatches& w = with_orb.two_view(0, key);
+  EXPECT_FALSE(k.points_from_orb);
+  EXPECT_TRUE(w.points_from_orb);
+  EXPECT_GT(w.n_points(), 2 * k.n_points());
+  EXPECT_EQ(w.n_lines(), k.n_lines());  // lines are not affected
+  for (const PointMatch& p : w.points) {
+    ASSERT_GE(p.idx_a, 0);
+    ASSERT_LT(p.idx_a, static_cast<int>(key.keypoints.size()));
+  }
+  // Same light: KLT has plenty, the fallback (below 20) does not start.
+  o.orb_fallback_below_points = 20;
+  FrameMatcher same_light(bright, o);
+  const TwoViewMatches& b = same_light.two_view(0, key);
+  EXPECT_GE(b.n_points(), 20);
+  EXPECT_FALSE(b.points_from_orb);
+}
+
 class PepperQutData : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -65,6 +65,11 @@ struct MatcherOptions {
   bool klt_shift_from_lines = true;
   double orb_ratio = 0.8;                  ///< wide baseline ratio test
   int orb_max_hamming = 64;                ///< wide baseline max Hamming distance (0..256)
+  /// FrameMatcher::two_view: when KLT verifies fewer points than this and both images carry ORB
+  /// keypoints, the wide-baseline (ORB) points replace them if there are more (ORB compares
+  /// grey levels within a patch, so a light change does not defeat it the way it defeats KLT's
+  /// patch error). 0: off.
+  int orb_fallback_below_points = 0;
   std::vector<std::string> validate() const;
 };
 
@@ -91,6 +96,9 @@ struct TwoViewMatches {
   int point_candidates = 0;        ///< KLT tracks (or ORB matches) before RANSAC
   bool essential_found = false;
   cv::Matx33d E_b_a = cv::Matx33d::zeros();
+  /// The points are ORB matches (idx_a indexes a's keypoints, not its corners): see
+  /// MatcherOptions::orb_fallback_below_points.
+  bool points_from_orb = false;
 
   int n_lines() const { return static_cast<int>(lines.size()); }
   int n_points() const { return static_cast<int>(points.size()); }
