@@ -619,19 +619,27 @@ const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
-  TwoViewMatches r = match_two_view(key, current_, options_, p);
-  if (r.n_points() < options_.orb_fallback_below_points && !key.keypoints.empty() &&
-      !current_.keypoints.empty()) {
-    TwoViewMatches w = match_wide_baseline(key, current_, options_);
-    if (w.n_points() > r.n_points()) {
-      r.points = std::move(w.points);
-      r.point_candidates = w.point_candidates;
-      r.essential_found = w.essential_found;
-      r.E_b_a = w.E_b_a;
-      r.points_from_orb = true;
-    }
+  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p)).first->second;
+}
+
+const TwoViewMatches& FrameMatcher::two_view_for_control(int64_t key_id, const ImageFeatures& key) {
+  const TwoViewMatches& klt = two_view(key_id, key);
+  if (klt.n_points() >= options_.orb_fallback_below_points || key.keypoints.empty() ||
+      current_.keypoints.empty()) {
+    return klt;
   }
-  return two_view_.emplace(key_id, std::move(r)).first->second;
+  auto it = control_.find(key_id);
+  if (it != control_.end()) return it->second;
+  TwoViewMatches r = klt;
+  const TwoViewMatches& w = wide_baseline(key_id, key);
+  if (w.n_points() > r.n_points()) {
+    r.points = w.points;
+    r.point_candidates = w.point_candidates;
+    r.essential_found = w.essential_found;
+    r.E_b_a = w.E_b_a;
+    r.points_from_orb = true;
+  }
+  return control_.emplace(key_id, std::move(r)).first->second;
 }
 
 const TwoViewMatches* FrameMatcher::computed_two_view(int64_t key_id) const {

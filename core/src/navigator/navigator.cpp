@@ -299,9 +299,9 @@ void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
 std::optional<double> Navigator::ibvs_omega(features::FrameMatcher& fm, Telemetry& tel) {
   const localization::Segment& seg = switcher_->segment();
   const features::ImageFeatures& cur = fm.current();
-  const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
+  const features::TwoViewMatches& tv_n = fm.two_view_for_control(seg.next, key(seg.next));
   const features::TwoViewMatches* tv_nn =
-      seg.next_next ? &fm.two_view(*seg.next_next, key(*seg.next_next)) : nullptr;
+      seg.next_next ? &fm.two_view_for_control(*seg.next_next, key(*seg.next_next)) : nullptr;
   control::IbvsInput in;
   if (tv_n.n_lines() >= options_.min_line_matches) {
     const LineSets s = line_sets(tv_n, key(seg.next), cur);
@@ -507,7 +507,8 @@ StepResult Navigator::step(const Frame& frame) {
     bool reached_final = false;
     const int min_points =
         seg.next_next ? options_.min_scale_points : options_.arrival_min_scale_points;
-    if (const auto ratio = scale_ratio(tv_n, key(seg.next), fm.current(), min_points)) {
+    if (const auto ratio = scale_ratio(fm.two_view_for_control(seg.next, key(seg.next)),
+                                       key(seg.next), fm.current(), min_points)) {
       counts.next_scale_ratio = *ratio;
       tel.next_scale_ratio = *ratio;
     }
@@ -580,7 +581,7 @@ StepResult Navigator::step(const Frame& frame) {
   tel.timings.match_ms = ms_since(t0);
   {  // display only; the control law above already computed (and cached) these matches
     const int in = switcher_->segment().next;
-    tel.overlay = features::matched_overlay(fm.two_view(in, key(in)), fm.current(), in);
+    tel.overlay = features::matched_overlay(fm.two_view_for_control(in, key(in)), fm.current(), in);
   }
   t0 = Clock::now();
   Command cmd;

@@ -80,8 +80,8 @@ TEST_F(VispSequenceData, ConsecutiveFramesVerifyOverThreeViews) {
 
 // The light halved between a key image and the current one: KLT's patch error rejects most
 // tracks, ORB (intensity comparisons within a patch) keeps matching. With
-// orb_fallback_below_points above KLT's count, FrameMatcher::two_view returns the ORB points
-// (flagged: their idx_a are keypoints); below it, KLT's, unflagged.
+// orb_fallback_below_points above KLT's count, FrameMatcher::two_view_for_control returns the ORB
+// points (flagged: their idx_a are keypoints) and two_view() still KLT's; below it, KLT's.
 // Measured (frames 0 and 1 of mbt/cube, frame 1 x0.5): KLT 0 points, ORB 165.
 TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   const FeatureExtractor ex(cube_camera());
@@ -96,7 +96,8 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   MatcherOptions o;
   o.orb_fallback_below_points = 1000;
   FrameMatcher with_orb(current, o);
-  const TwoViewMatches& w = with_orb.two_view(0, key);
+  const TwoViewMatches& w = with_orb.two_view_for_control(0, key);
+  EXPECT_EQ(with_orb.two_view(0, key).n_points(), k.n_points());  // switching counts unchanged
   EXPECT_FALSE(k.points_from_orb);
   EXPECT_TRUE(w.points_from_orb);
   EXPECT_GT(w.n_points(), 2 * k.n_points());
@@ -108,7 +109,7 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   // Same light: KLT has plenty, the fallback (below 20) does not start.
   o.orb_fallback_below_points = 20;
   FrameMatcher same_light(bright, o);
-  const TwoViewMatches& b = same_light.two_view(0, key);
+  const TwoViewMatches& b = same_light.two_view_for_control(0, key);
   EXPECT_GE(b.n_points(), 20);
   EXPECT_FALSE(b.points_from_orb);
 }

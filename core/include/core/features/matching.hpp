@@ -65,8 +65,8 @@ struct MatcherOptions {
   bool klt_shift_from_lines = true;
   double orb_ratio = 0.8;                  ///< wide baseline ratio test
   int orb_max_hamming = 64;                ///< wide baseline max Hamming distance (0..256)
-  /// FrameMatcher::two_view: when KLT verifies fewer points than this and both images carry ORB
-  /// keypoints, the wide-baseline (ORB) points replace them if there are more (ORB compares
+  /// FrameMatcher::two_view_for_control: when KLT verifies fewer points than this and both
+  /// images carry ORB keypoints, the wide-baseline (ORB) points replace them if there are more (ORB compares
   /// grey levels within a patch, so a light change does not defeat it the way it defeats KLT's
   /// patch error). 0: off.
   int orb_fallback_below_points = 0;
@@ -176,6 +176,12 @@ class FrameMatcher {
   /// n(key, current): verified lines + KLT points (cached per key id).
   const TwoViewMatches& two_view(int64_t key_id, const ImageFeatures& key);
 
+  /// two_view() for the control law and the scale ratio: when KLT verified fewer points than
+  /// orb_fallback_below_points and both images carry ORB keypoints, the same lines with the
+  /// wide-baseline points if those are more (points_from_orb). The switching counts and the
+  /// three-view sets keep using two_view().
+  const TwoViewMatches& two_view_for_control(int64_t key_id, const ImageFeatures& key);
+
   /// The cached two-view result of key_id, nullptr when two_view() was not called for it.
   const TwoViewMatches* computed_two_view(int64_t key_id) const;
 
@@ -197,6 +203,7 @@ class FrameMatcher {
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
+  std::unordered_map<int64_t, TwoViewMatches> control_;
   std::unordered_map<std::pair<int64_t, int64_t>, ThreeViewMatches, PairHash> three_view_;
 };
 
