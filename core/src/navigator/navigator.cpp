@@ -271,8 +271,7 @@ void Navigator::remember_tracks(const features::FrameMatcher& fm) {
   if (!switcher_) return;
   const localization::Segment& seg = switcher_->segment();
   for (const int i : {seg.prev, seg.next, seg.next_next.value_or(-1)}) {
-    const features::TwoViewMatches* m = i >= 0 ? fm.computed_two_view(i) : nullptr;
-    if (m && !m->points_from_orb) {  // ORB matches are no KLT tracks of the key's corners
+    if (const features::TwoViewMatches* m = i >= 0 ? fm.computed_two_view(i) : nullptr) {
       klt_priors_[i] = m->points;
     }
   }
@@ -401,12 +400,8 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   if (!vnhv_model_) return std::nullopt;
   const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
   bool past_next = false;
-  // The model knows IN's corners; ORB fallback points are keypoints: no fix this frame.
-  const std::optional<control::PlanarFix> fix =
-      tv_n.points_from_orb
-          ? std::nullopt
-          : control::locate_in_segment(*vnhv_model_, corner_observations(tv_n), focal_px, o.pose);
-  if (fix) {
+  if (const auto fix =
+          control::locate_in_segment(*vnhv_model_, corner_observations(tv_n), focal_px, o.pose)) {
     const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
     const bool arc = vnhv_curvature_1_m_ != 0.0;
     // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
@@ -473,6 +468,7 @@ StepResult Navigator::step(const Frame& frame) {
   const bool need_localization = state_ == NavState::kNotLocalized || state_ == NavState::kLost;
   auto t0 = Clock::now();
   unsigned parts = features::kPartsCurrentFrame;
+  // ORB keypoints: for the initial localisation, and every frame with the ORB fallback.
   if (need_localization || options_.matcher.orb_fallback_below_points > 0) {
     parts |= features::kPartWideBaseline;
   }

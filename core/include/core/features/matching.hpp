@@ -66,9 +66,9 @@ struct MatcherOptions {
   double orb_ratio = 0.8;                  ///< wide baseline ratio test
   int orb_max_hamming = 64;                ///< wide baseline max Hamming distance (0..256)
   /// FrameMatcher::two_view_for_control: when KLT verifies fewer points than this and both
-  /// images carry ORB keypoints, the wide-baseline (ORB) points replace them if there are more (ORB compares
-  /// grey levels within a patch, so a light change does not defeat it the way it defeats KLT's
-  /// patch error). 0: off.
+  /// images carry ORB keypoints, the wide-baseline (ORB) points replace them if there are more
+  /// (ORB compares grey levels within a patch, so a light change does not defeat it the way it
+  /// defeats KLT's patch error). 0: off. docs/perception.md "Light changes".
   int orb_fallback_below_points = 0;
   std::vector<std::string> validate() const;
 };
