@@ -407,6 +407,7 @@ std::vector<std::string> MatcherOptions::validate() const {
   if (orb_fallback_below_points < 0)
     e.push_back("orb_fallback_below_points = " + std::to_string(orb_fallback_below_points) +
                 " must be >= 0");
+  if (!match_lines && !match_points) e.push_back("match_lines and match_points are both off");
   return e;
 }
 
@@ -456,8 +457,9 @@ TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
   check_image(a, "match_two_view (a)");
   check_image(b, "match_two_view (b)");
   TwoViewMatches r;
-  const std::vector<LineMatch> line_cands = line_candidates(a, b, options, r);
-  if (!a.corners_px.empty()) {
+  const std::vector<LineMatch> line_cands =
+      options.match_lines ? line_candidates(a, b, options, r) : std::vector<LineMatch>{};
+  if (options.match_points && !a.corners_px.empty()) {
     // KLT starts at the lines' common shift when the image moved further than a KLT window
     // (turns); measured in closed loop on the mock robot against starting from rest, and
     // against using the shift only when tracking from rest verifies under half of the corners
@@ -478,7 +480,8 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
   TwoViewMatches r;
   std::vector<PointMatch> cands;
   std::vector<float> cost;  // Hamming distance of the match
-  if (!a.keypoint_descriptors.empty() && !b.keypoint_descriptors.empty()) {
+  if (options.match_points && !a.keypoint_descriptors.empty() &&
+      !b.keypoint_descriptors.empty()) {
     const cv::Mat& da = a.keypoint_descriptors;
     const cv::Mat& db = b.keypoint_descriptors;
     const int na = da.rows, nb = db.rows;
@@ -522,7 +525,7 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
     }
   }
   verify_points(b, std::move(cands), cost, options, r);
-  verify_lines(a, b, options, r);
+  if (options.match_lines) verify_lines(a, b, options, r);
   return r;
 }
 

@@ -20,6 +20,12 @@ const char* to_string(ControllerKind k) {
   return "unknown";
 }
 
+features::MatcherOptions matcher_for(control::FeatureMode mode, features::MatcherOptions base) {
+  base.match_lines = mode != control::FeatureMode::kPointsOnly;
+  base.match_points = mode != control::FeatureMode::kLinesOnly;
+  return base;
+}
+
 const char* to_string(NavState s) {
   switch (s) {
     case NavState::kNotLocalized:
@@ -189,6 +195,8 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
       extractor_(map_.camera, options.extractor),
       schedule_(options.schedule),
       vnhv_filter_(options.vnhv.filter) {
+  options_.ibvs.mode = options_.features;
+  options_.matcher = matcher_for(options_.features, options_.matcher);
   if (const auto errors = options_.validate(); !errors.empty()) {
     throw std::invalid_argument("Navigator: " + errors.front());
   }
@@ -469,7 +477,8 @@ StepResult Navigator::step(const Frame& frame) {
   auto t0 = Clock::now();
   unsigned parts = features::kPartsCurrentFrame;
   // ORB keypoints: for the initial localisation, and every frame with the ORB fallback.
-  if (need_localization || options_.matcher.orb_fallback_below_points > 0) {
+  if (need_localization ||
+      (options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points)) {
     parts |= features::kPartWideBaseline;
   }
   features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher);

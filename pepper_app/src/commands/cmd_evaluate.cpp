@@ -134,11 +134,16 @@ int run_evaluate(const EvaluateArgs& a) {
     } else if (!a.plots_dir.empty()) {
       to.map_dir = std::filesystem::path(a.plots_dir) / ("map_" + world->name + "_" + a.size);
     }
-    const ev::TeachResult teach = ev::teach_tour(world, to, progress);
-    for (const auto& config : configs) {
-      for (const auto mode : modes) {
-        ev::EvaluationOptions ro = to;
-        ro.features = mode;
+    for (const auto mode : modes) {
+      // Each modality teaches its own map (lines or points only are whole systems).
+      ev::EvaluationOptions mo = to;
+      mo.features = mode;
+      if (!mo.map_dir.empty() && mode != core::control::FeatureMode::kLinesAndPoints) {
+        mo.map_dir += std::string("_") + ev::feature_label(mode);
+      }
+      const ev::TeachResult teach = ev::teach_tour(world, mo, progress);
+      for (const auto& config : configs) {
+        ev::EvaluationOptions ro = mo;
         ro.disturbances = config;
         ev::Evaluation e = ev::evaluate(teach, world, ro, progress);
         if (!a.plots_dir.empty()) {

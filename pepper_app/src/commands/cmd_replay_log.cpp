@@ -83,7 +83,7 @@ void register_replay_log_command(CLI::App& app) {
   cmd->add_flag("-q,--quiet", args->quiet, "Print the summary only");
   cmd->add_option("--config", args->config_file, "Configuration file (YAML/JSON)");
   cmd->add_option("--set", args->sets,
-                  "Override one parameter, e.g. --set navigator.ibvs.features=lines (repeatable)");
+                  "Override one parameter, e.g. --set navigator.features=lines (repeatable)");
   cmd->footer("Example:\n  pepper_app replay-log --recording rec/replay1 --map maps/lab_tour "
               "--json replay1.json");
   cmd->callback([args] { exit_code() = run_replay_log(*args); });

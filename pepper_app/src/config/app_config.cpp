@@ -120,7 +120,6 @@ template <class V> void visit(V& v, cm::KeyImageSelectorOptions& o) {
   v("max_fraction", o.max_fraction);
 }
 template <class V> void visit(V& v, cc::IbvsOptions& o) {
-  v.enumeration("features", o.mode, feature_mode_names());
   v("g1", o.g1);
   v("g2", o.g2);
   v("lambda", o.lambda);
@@ -171,6 +170,7 @@ template <class V> void visit(V& v, cl::SwitcherOptions& o) {
 }
 template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v.enumeration("controller", o.controller, controller_names());
+  v.enumeration("features", o.features, feature_mode_names());
   v.group("ibvs", [&](V& s) { visit(s, o.ibvs); });
   v.group("vnhv", [&](V& s) { visit(s, o.vnhv); });
   v.group("speed", [&](V& s) { visit(s, o.schedule); });

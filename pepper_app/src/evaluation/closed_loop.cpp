@@ -97,7 +97,9 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
   core::mapping::TeachOptions to;
   to.selector = options.key_images;
   to.extractor = options.navigator.extractor;
-  to.matcher = options.navigator.matcher;
+  // A single-modality evaluation teaches with that modality too (the paper's "lines only" and
+  // "points only" are whole systems): key images are chosen from its counts alone.
+  to.matcher = core::navigator::matcher_for(options.features, options.navigator.matcher);
   core::mapping::Teacher teacher(camera, to);
 
   TeachResult out;
@@ -135,7 +137,11 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
                     ? std::filesystem::temp_directory_path() /
                           ("pepper_eval_map_" + world->name + "_" +
                            std::to_string(options.width_px) + "x" +
-                           std::to_string(options.height_px) + "_" + std::to_string(::getpid()))
+                           std::to_string(options.height_px) +
+                           (options.features == core::control::FeatureMode::kLinesAndPoints
+                                ? std::string()
+                                : "_" + std::string(feature_label(options.features))) +
+                           "_" + std::to_string(::getpid()))
                     : options.map_dir;
   core::memory::save_map(map, out.map_dir);
   out.map = core::memory::load_map(out.map_dir);
@@ -143,7 +149,11 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
   out.wall_s = seconds_since(t0);
   if (progress) {
     std::ostringstream os;
-    os << "teach " << world->name << ": " << out.frames << " frames, "
+    os << "teach " << world->name
+       << (options.features == core::control::FeatureMode::kLinesAndPoints
+               ? std::string()
+               : " [" + std::string(feature_label(options.features)) + "]")
+       << ": " << out.frames << " frames, "
        << fmt("%.2f", out.length_m) << " m, " << out.map.key_images.size() << " key images ("
        << fmt("%.2f", key_images_per_m(static_cast<int>(out.map.key_images.size()), out.length_m))
        << " per m), map " << out.map_dir.string() << ", " << fmt("%.1f", out.wall_s) << " s";
@@ -189,7 +199,7 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
   robot.place(start);
 
   nav::NavigatorOptions no = options.navigator;
-  no.ibvs.mode = options.features;
+  no.features = options.features;
   no.controller = options.controller;
   nav::Navigator navigator(teach.map, no);
 

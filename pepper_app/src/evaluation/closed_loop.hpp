@@ -47,6 +47,7 @@ struct EvaluationOptions {
   uint64_t seed = 1;                ///< start perturbations, disturbances, noise
   int width_px = 640;               ///< camera size (VGA; 320x240 for quick runs)
   int height_px = 480;
+  /// Lines, points or both: teach (key-image selection) and replay match only these.
   core::control::FeatureMode features = core::control::FeatureMode::kLinesAndPoints;
   core::navigator::ControllerKind controller = core::navigator::ControllerKind::kIbvs;
   /// Start perturbations (uniform, +-): replaces the world's own ranges. The start of run k is
@@ -159,8 +160,9 @@ struct Evaluation {
 /// Progress lines ("start 3/10: ...") go through this callback (may be empty).
 using ProgressFn = std::function<void(const std::string&)>;
 
-/// Teaches the world's tour at the options' image size, saves the map to options.map_dir (or a
-/// temporary folder) and loads it back.
+/// Teaches the world's tour at the options' image size with the options' features (lines or
+/// points only: a single-modality map), saves the map to options.map_dir (or a temporary
+/// folder) and loads it back.
 TeachResult teach_tour(const std::shared_ptr<const naoqi_bridge::mock::World>& world,
                        const EvaluationOptions& options, const ProgressFn& progress = {});
 

@@ -25,7 +25,7 @@ TEST(AppConfig, DumpThenLoadIsIdentity) {
   AppConfig c;
   c.navigator.ibvs.g1 = 0.55;
   c.navigator.controller = core::navigator::ControllerKind::kVnhv;
-  c.navigator.ibvs.mode = core::control::FeatureMode::kPointsOnly;
+  c.navigator.features = core::control::FeatureMode::kPointsOnly;
   c.matcher.trifocal.seed = 42;
   c.robot.user = "nao";
   test::TempDir tmp;
@@ -42,10 +42,10 @@ TEST(AppConfig, OverridesApplyAfterTheFileInOrder) {
   const auto file = tmp.path() / "c.yaml";
   std::ofstream(file) << "navigator:\n  ibvs:\n    g1: 0.6\nrobot:\n  camera_fps: 10\n";
   const AppConfig c = load_app_config(
-      file, {"navigator.ibvs.g1=0.5", "navigator.ibvs.features=lines", "robot.camera_fps=12",
+      file, {"navigator.ibvs.g1=0.5", "navigator.features=lines", "robot.camera_fps=12",
              "robot.user=\"123\""});
   EXPECT_DOUBLE_EQ(c.navigator.ibvs.g1, 0.5);
-  EXPECT_EQ(c.navigator.ibvs.mode, core::control::FeatureMode::kLinesOnly);
+  EXPECT_EQ(c.navigator.features, core::control::FeatureMode::kLinesOnly);
   EXPECT_EQ(c.robot.camera_fps, 12);
   EXPECT_EQ(c.robot.user, "123");  // quoted: stays a string
 }

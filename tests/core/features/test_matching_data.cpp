@@ -114,6 +114,46 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   EXPECT_FALSE(b.points_from_orb);
 }
 
+// Lines only / points only (METHOD.md): a kind switched off is not matched in two, three or
+// wide-baseline views, and the other kind is matched as before except for what the switched-off
+// kind would have lent it (lines: no epipolar check without points; points: no KLT start from
+// the lines' shift, which frames 0 and 40 do not need).
+TEST_F(VispSequenceData, SingleModalityMatchesOnlyItsKind) {
+  const FeatureExtractor ex(cube_camera());
+  const ImageFeatures f0 = load(ex, cube_frame(0));
+  const ImageFeatures f1 = load(ex, cube_frame(1));
+  const ImageFeatures f40 = load(ex, cube_frame(40));
+  const TwoViewMatches both = match_two_view(f0, f40);
+  MatcherOptions lines_only, points_only;
+  lines_only.match_points = false;
+  points_only.match_lines = false;
+  const TwoViewMatches l = match_two_view(f0, f40, lines_only);
+  const TwoViewMatches p = match_two_view(f0, f40, points_only);
+  EXPECT_EQ(l.n_points(), 0);
+  EXPECT_EQ(l.point_candidates, 0);
+  EXPECT_FALSE(l.essential_found);
+  EXPECT_GE(l.n_lines(), both.n_lines());  // no epipolar check can drop a line
+  EXPECT_GT(l.n_lines(), 10);
+  EXPECT_EQ(p.n_lines(), 0);
+  EXPECT_EQ(p.line_candidates, 0);
+  EXPECT_EQ(p.n_points(), both.n_points());
+
+  FrameMatcher lm(f1, lines_only), pm(f1, points_only);
+  EXPECT_EQ(lm.three_view(0, f0, 40, f40).n_points(), 0);
+  EXPECT_GT(lm.three_view(0, f0, 40, f40).n_lines(), 0);
+  EXPECT_EQ(pm.three_view(0, f0, 40, f40).n_lines(), 0);
+  EXPECT_GT(pm.three_view(0, f0, 40, f40).n_points(), 0);
+  EXPECT_EQ(lm.wide_baseline(0, f0).n_points(), 0);
+  EXPECT_GT(lm.wide_baseline(0, f0).n_lines(), 0);
+  EXPECT_EQ(pm.wide_baseline(0, f0).n_lines(), 0);
+  EXPECT_GT(pm.wide_baseline(0, f0).n_points(), 20);
+
+  MatcherOptions neither = lines_only;
+  neither.match_lines = false;
+  EXPECT_FALSE(neither.validate().empty());
+  EXPECT_THROW(match_two_view(f0, f40, neither), std::invalid_argument);
+}
+
 class PepperQutData : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -241,6 +241,38 @@ TEST(Navigator, StartsMidTourOnTheRightSegment) {
   EXPECT_TRUE(in_ahead || inn_ahead) << "IN " << in << " at frame " << keys[in].source_frame_index;
 }
 
+// Lines only / points only: the navigator matches nothing of the other kind, so neither its
+// counts nor its control use it; VNHV, which reconstructs the segment from points, has no
+// estimate with lines only and steers with the lines' IBVS law.
+TEST(Navigator, SingleModalitySeesOnlyItsKind) {
+  const std::vector<Frame> frames(tour().frames.begin() + 20, tour().frames.begin() + 70);
+  for (const ControllerKind controller : {ControllerKind::kIbvs, ControllerKind::kVnhv}) {
+    NavigatorOptions o;
+    o.controller = controller;
+    o.vnhv.teach_speed_m_s = 0.225;
+    o.features = control::FeatureMode::kLinesOnly;
+    int lines_used = 0, vnhv_estimates = 0;
+    for (const StepResult& r : replay(frames, o)) {
+      EXPECT_EQ(r.telemetry.n_points_next, 0);
+      EXPECT_FALSE(r.telemetry.used_points);
+      lines_used += r.telemetry.used_lines ? 1 : 0;
+      vnhv_estimates += std::isfinite(r.telemetry.vnhv_lateral_m) ? 1 : 0;
+    }
+    EXPECT_GT(lines_used, 40) << to_string(controller);
+    EXPECT_EQ(vnhv_estimates, 0) << to_string(controller);
+
+    o.features = control::FeatureMode::kPointsOnly;
+    int steered_by_points = 0;  // the points' IBVS law, or VNHV's estimate from the points
+    for (const StepResult& r : replay(frames, o)) {
+      EXPECT_EQ(r.telemetry.n_lines_next, 0);
+      EXPECT_FALSE(r.telemetry.used_lines);
+      steered_by_points +=
+          r.telemetry.used_points || std::isfinite(r.telemetry.vnhv_lateral_m) ? 1 : 0;
+    }
+    EXPECT_GT(steered_by_points, 40) << to_string(controller);
+  }
+}
+
 TEST(Navigator, ContractViolationsThrow) {
   Navigator nav(tour().map);
   EXPECT_THROW(nav.step(Frame{}), std::invalid_argument);

@@ -70,6 +70,14 @@ struct MatcherOptions {
   /// (ORB compares grey levels within a patch, so a light change does not defeat it the way it
   /// defeats KLT's patch error). 0: off. docs/perception.md "Light changes".
   int orb_fallback_below_points = 0;
+  /// Which kinds of feature are matched at all (METHOD.md's "lines only" / "points only"
+  /// systems). A kind switched off is never matched, in two, three or wide-baseline views, so
+  /// nothing downstream (key-image counts, switching, the control laws, the segment
+  /// reconstruction, the scale ratio) can use it; nor do its results steer the other kind (no
+  /// KLT start from line shifts without lines, no epipolar check of lines without points).
+  /// At least one must be on.
+  bool match_lines = true;
+  bool match_points = true;
   std::vector<std::string> validate() const;
 };
 

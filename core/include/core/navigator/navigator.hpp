@@ -54,8 +54,16 @@ namespace pepper::core::navigator {
 enum class ControllerKind { kIbvs, kVnhv };
 const char* to_string(ControllerKind k);
 
+/// `base` restricted to the kinds of feature of `mode` (MatcherOptions::match_lines,
+/// match_points). Teach with the same restriction to build a single-modality map.
+features::MatcherOptions matcher_for(control::FeatureMode mode, features::MatcherOptions base);
+
 struct NavigatorOptions {
   ControllerKind controller = ControllerKind::kIbvs;
+  /// Lines, points or both (METHOD.md; the paper's comparison): the Navigator matches only these
+  /// (matcher_for), so localisation, switching, both control laws and the scale ratio see only
+  /// them; it also sets ibvs.mode to this.
+  control::FeatureMode features = control::FeatureMode::kLinesAndPoints;
   control::IbvsOptions ibvs;
   control::VnhvOptions vnhv;
   control::VelocityScheduleOptions schedule;
