@@ -635,7 +635,7 @@ const TwoViewMatches& FrameMatcher::two_view_for_control(int64_t key_id, const I
   if (it != control_.end()) return it->second;
   TwoViewMatches r = klt;
   const TwoViewMatches& w = wide_baseline(key_id, key);
-  if (w.n_points() > r.n_points()) {
+  if (w.n_points() >= options_.orb_fallback_below_points && w.n_points() > r.n_points()) {
     r.points = w.points;
     r.point_candidates = w.point_candidates;
     r.essential_found = w.essential_found;

@@ -80,8 +80,9 @@ TEST_F(VispSequenceData, ConsecutiveFramesVerifyOverThreeViews) {
 
 // The light halved between a key image and the current one: KLT's patch error rejects most
 // tracks, ORB (intensity comparisons within a patch) keeps matching. With
-// orb_fallback_below_points above KLT's count, FrameMatcher::two_view_for_control returns the ORB
-// points (flagged: their idx_a are keypoints) and two_view() still KLT's; below it, KLT's.
+// orb_fallback_below_points above KLT's count and at most ORB's, FrameMatcher::
+// two_view_for_control returns the ORB points (flagged: their idx_a are keypoints) and
+// two_view() still KLT's; above ORB's count too (too few either way), KLT's; below KLT's, KLT's.
 // Measured (frames 0 and 1 of mbt/cube, frame 1 x0.5): KLT 0 points, ORB 165.
 TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   const FeatureExtractor ex(cube_camera());
@@ -94,7 +95,7 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   FrameMatcher klt_only(current);
   const TwoViewMatches& k = klt_only.two_view(0, key);
   MatcherOptions o;
-  o.orb_fallback_below_points = 1000;
+  o.orb_fallback_below_points = 100;
   FrameMatcher with_orb(current, o);
   const TwoViewMatches& w = with_orb.two_view_for_control(0, key);
   EXPECT_EQ(with_orb.two_view(0, key).n_points(), k.n_points());  // switching counts unchanged
@@ -106,6 +107,11 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
     ASSERT_GE(p.idx_a, 0);
     ASSERT_LT(p.idx_a, static_cast<int>(key.keypoints.size()));
   }
+  // More than ORB has: ORB's few are no better than KLT's few, KLT's stay.
+  o.orb_fallback_below_points = 1000;
+  FrameMatcher too_few(current, o);
+  EXPECT_FALSE(too_few.two_view_for_control(0, key).points_from_orb);
+  EXPECT_EQ(too_few.two_view_for_control(0, key).n_points(), k.n_points());
   // Same light: KLT has plenty, the fallback (below 20) does not start.
   o.orb_fallback_below_points = 20;
   FrameMatcher same_light(bright, o);

@@ -67,8 +67,11 @@ struct MatcherOptions {
   int orb_max_hamming = 64;                ///< wide baseline max Hamming distance (0..256)
   /// FrameMatcher::two_view_for_control: when KLT verifies fewer points than this and both
   /// images carry ORB keypoints, the wide-baseline (ORB) points replace them if there are more
-  /// (ORB compares grey levels within a patch, so a light change does not defeat it the way it
-  /// defeats KLT's patch error). 0: off. docs/perception.md "Light changes".
+  /// and at least this many (ORB compares grey levels within a patch, so a light change does
+  /// not defeat it the way it defeats KLT's patch error; but its matches are global, and a few
+  /// wrong ones pass a five-point RANSAC: measured, room_corridor_room's first left turn, where
+  /// 8-11 ORB points steered right while the lines and the tour turned left). 0: off.
+  /// docs/perception.md "Light changes".
   int orb_fallback_below_points = 0;
   /// Which kinds of feature are matched at all (METHOD.md's "lines only" / "points only"
   /// systems). A kind switched off is never matched, in two, three or wide-baseline views, so
@@ -186,7 +189,8 @@ class FrameMatcher {
 
   /// two_view() for the control law and the scale ratio: when KLT verified fewer points than
   /// orb_fallback_below_points and both images carry ORB keypoints, the same lines with the
-  /// wide-baseline points if those are more (points_from_orb). The switching counts and the
+  /// wide-baseline points if those are more and at least orb_fallback_below_points
+  /// (points_from_orb). The switching counts and the
   /// three-view sets keep using two_view().
   const TwoViewMatches& two_view_for_control(int64_t key_id, const ImageFeatures& key);
 
