@@ -551,14 +551,6 @@ const LightingCondition& World::light(const std::string& condition) const {
 
 namespace {
 
-double dist_point_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                          const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double l2 = ab.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
-}
-
 double dist_point_rect(const Eigen::Vector2d& p, const Eigen::Vector2d& c,
                        const Eigen::Vector2d& half, double yaw) {
   const Eigen::Vector2d d = p - c;
@@ -572,8 +564,12 @@ double dist_point_rect(const Eigen::Vector2d& p, const Eigen::Vector2d& c,
 
 std::optional<std::string> World::collision(const Eigen::Vector2d& p_m, double radius_m,
                                             double t_s) const {
-  for (const WallObstacle& w : walls)
-    if (dist_point_segment(p_m, w.a_m, w.b_m) < radius_m + w.half_thickness_m) return w.what;
+  for (const WallObstacle& w : walls) {
+    const Eigen::Vector2d d = w.b_m - w.a_m;
+    const Eigen::Vector2d half(0.5 * d.norm(), w.half_thickness_m);
+    if (dist_point_rect(p_m, 0.5 * (w.a_m + w.b_m), half, std::atan2(d.y(), d.x())) < radius_m)
+      return w.what;
+  }
   for (const BoxObstacle& b : boxes)
     if (dist_point_rect(p_m, b.center_m, b.half_size_m, b.yaw_rad) < radius_m) return b.what;
   for (const MovingObstacle& m : people) {

@@ -173,6 +173,15 @@ TEST(World, OpeningsArePassableDoorsAreNot) {
   const World w = parse_world(yaml, "mem.yaml", kWorlds);
   EXPECT_FALSE(w.collision({2.0, 0.0}, 0.3, 0.0).has_value());  // in the opening at x = 2
   EXPECT_TRUE(w.collision({4.0, 1.5}, 0.3, 0.0).has_value());   // the door at y = 1.5
+  // The opening spans x = 1.5..2.5 and the wall pieces end flat there (0.1 m thick): a 0.3 m
+  // disc 0.17 m off the opening's centre has 3 cm to spare, 0.21 m off it touches.
+  EXPECT_FALSE(w.collision({2.17, 0.0}, 0.3, 0.0).has_value());
+  EXPECT_FALSE(w.collision({1.83, 0.0}, 0.3, 0.0).has_value());
+  EXPECT_TRUE(w.collision({2.21, 0.0}, 0.3, 0.0).has_value());
+  EXPECT_TRUE(w.collision({1.79, 0.0}, 0.3, 0.0).has_value());
+  // Beside a wall: its face is half the thickness from its line.
+  EXPECT_FALSE(w.collision({3.0, 0.36}, 0.3, 0.0).has_value());
+  EXPECT_TRUE(w.collision({3.0, 0.34}, 0.3, 0.0).has_value());
 }
 
 TEST(World, MovingObstacleWalksBackAndForth) {

@@ -64,7 +64,9 @@ struct Quad {
   bool is_floor = false;
 };
 
-/// 2D obstacle: a wall segment with a thickness.
+/// 2D obstacle: a wall piece, the rectangle of the segment a-b widened by half_thickness_m on
+/// each side. Its ends are flat, as the rendered wall's: an opening is as wide for collisions as
+/// the world file says (a rounded end reached half_thickness_m into it).
 struct WallObstacle {
   Eigen::Vector2d a_m = Eigen::Vector2d::Zero();
   Eigen::Vector2d b_m = Eigen::Vector2d::Zero();
