@@ -70,9 +70,10 @@ struct MatcherOptions {
   /// and at least this many (ORB compares grey levels within a patch, so a light change does
   /// not defeat it the way it defeats KLT's patch error; but its matches are global, and a few
   /// wrong ones pass a five-point RANSAC: measured, room_corridor_room's first left turn, where
-  /// 8-11 ORB points steered right while the lines and the tour turned left). 0: off.
-  /// docs/perception.md "Light changes".
-  int orb_fallback_below_points = 0;
+  /// 8-11 ORB points steered right while the lines and the tour turned left). 0: off. 12 since
+  /// session 9 (closed-loop figures: README "Closed-loop evaluation", docs/perception.md
+  /// "Light changes"); it costs ORB keypoints on every frame.
+  int orb_fallback_below_points = 12;
   /// Which kinds of feature are matched at all (METHOD.md's "lines only" / "points only"
   /// systems). A kind switched off is never matched, in two, three or wide-baseline views, so
   /// nothing downstream (key-image counts, switching, the control laws, the segment
