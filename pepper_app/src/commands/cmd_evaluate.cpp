@@ -138,9 +138,7 @@ int run_evaluate(const EvaluateArgs& a) {
       // Each modality teaches its own map (lines or points only are whole systems).
       ev::EvaluationOptions mo = to;
       mo.features = mode;
-      if (!mo.map_dir.empty() && mode != core::control::FeatureMode::kLinesAndPoints) {
-        mo.map_dir += std::string("_") + ev::feature_label(mode);
-      }
+      if (!mo.map_dir.empty()) mo.map_dir += ev::single_modality_tag(mode, "_");
       const ev::TeachResult teach = ev::teach_tour(world, mo, progress);
       for (const auto& config : configs) {
         ev::EvaluationOptions ro = mo;

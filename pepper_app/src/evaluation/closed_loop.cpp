@@ -52,6 +52,12 @@ const char* feature_label(core::control::FeatureMode mode) {
   return "?";
 }
 
+std::string single_modality_tag(core::control::FeatureMode mode, const std::string& prefix,
+                                const std::string& suffix) {
+  if (mode == core::control::FeatureMode::kLinesAndPoints) return "";
+  return prefix + feature_label(mode) + suffix;
+}
+
 std::vector<std::string> EvaluationOptions::validate() const {
   std::vector<std::string> e;
   auto check = [&](bool ok, const std::string& msg) {
@@ -138,10 +144,8 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
                           ("pepper_eval_map_" + world->name + "_" +
                            std::to_string(options.width_px) + "x" +
                            std::to_string(options.height_px) +
-                           (options.features == core::control::FeatureMode::kLinesAndPoints
-                                ? std::string()
-                                : "_" + std::string(feature_label(options.features))) +
-                           "_" + std::to_string(::getpid()))
+                           single_modality_tag(options.features, "_") + "_" +
+                           std::to_string(::getpid()))
                     : options.map_dir;
   core::memory::save_map(map, out.map_dir);
   out.map = core::memory::load_map(out.map_dir);
@@ -149,11 +153,8 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
   out.wall_s = seconds_since(t0);
   if (progress) {
     std::ostringstream os;
-    os << "teach " << world->name
-       << (options.features == core::control::FeatureMode::kLinesAndPoints
-               ? std::string()
-               : " [" + std::string(feature_label(options.features)) + "]")
-       << ": " << out.frames << " frames, "
+    os << "teach " << world->name << single_modality_tag(options.features, " [", "]") << ": "
+       << out.frames << " frames, "
        << fmt("%.2f", out.length_m) << " m, " << out.map.key_images.size() << " key images ("
        << fmt("%.2f", key_images_per_m(static_cast<int>(out.map.key_images.size()), out.length_m))
        << " per m), map " << out.map_dir.string() << ", " << fmt("%.1f", out.wall_s) << " s";

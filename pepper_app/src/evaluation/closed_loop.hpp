@@ -185,4 +185,9 @@ Summary summarize(const std::vector<RunResult>& runs, int key_images, double tau
 
 const char* feature_label(core::control::FeatureMode mode);
 
+/// `prefix` + feature_label(mode) + `suffix` for a single modality, "" for lines and points:
+/// what names that modality's map folder and teach line.
+std::string single_modality_tag(core::control::FeatureMode mode, const std::string& prefix,
+                                const std::string& suffix = "");
+
 }  // namespace pepper::app::evaluation
