@@ -94,6 +94,22 @@ void BM_TwoViewKeyToCurrent(benchmark::State& state) {
 }
 BENCHMARK(BM_TwoViewKeyToCurrent)->Unit(benchmark::kMillisecond);
 
+// The ORB fallback's matching (FrameMatcher::wide_baseline): a key image's ORB keypoints against
+// the current frame's, all pairs by Hamming distance, then the essential RANSAC and the lines.
+void BM_WideBaselineKeyToCurrent(benchmark::State& state) {
+  auto& s = scene();
+  const ImageFeatures cur = s.ex.extract(s.current_gray, kPartsCurrentFrame | kPartWideBaseline);
+  int n = 0;
+  for (auto _ : state) {
+    const TwoViewMatches m = match_wide_baseline(s.ip, cur);
+    n = m.n_points();
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["points"] = n;
+  state.counters["keypoints"] = static_cast<double>(cur.keypoints.size());
+}
+BENCHMARK(BM_WideBaselineKeyToCurrent)->Unit(benchmark::kMillisecond);
+
 void BM_ThreeViewVerification(benchmark::State& state) {
   auto& s = scene();
   const ImageFeatures cur = s.ex.extract(s.current_gray, kPartsCurrentFrame);
