@@ -26,6 +26,11 @@ std::vector<std::string> VnhvOptions::validate() const {
         max_arc_turn_rad, ">= 0");
   check(std::isfinite(teach_speed_m_s) && teach_speed_m_s > 0.0, "teach_speed_m_s", teach_speed_m_s,
         "> 0");
+  check(std::isfinite(straight_min_parallax_rad) && straight_min_parallax_rad > 0.0,
+        "straight_min_parallax_rad", straight_min_parallax_rad, "> 0");
+  check(straight_min_points >= 3, "straight_min_points", straight_min_points, ">= 3");
+  check(std::isfinite(straight_min_length_m) && straight_min_length_m >= 0.0,
+        "straight_min_length_m", straight_min_length_m, ">= 0");
   for (auto& e : pose.validate()) errors.push_back(std::move(e));
   for (auto& e : filter.validate()) errors.push_back(std::move(e));
   return errors;

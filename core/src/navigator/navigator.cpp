@@ -377,14 +377,21 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     vnhv_segment_next_ = seg.next;
     vnhv_filter_.reset();
     vnhv_model_.reset();
+    vnhv_pose_ = o.pose;
     const features::TwoViewMatches next_prev =
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
       const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);
       const double turn_rad = prev ? std::abs(prev->yaw_rad) : 0.0;
+      const double taught_m = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
+      if (prev && turn_rad <= o.max_segment_turn_rad && taught_m >= o.straight_min_length_m) {
+        // A long straight segment: distant points count too.
+        vnhv_pose_.min_parallax_rad = o.straight_min_parallax_rad;
+        vnhv_pose_.min_points = o.straight_min_points;
+      }
       if (prev && turn_rad <= std::max(o.max_segment_turn_rad, o.max_arc_turn_rad)) {
-        vnhv_model_ = control::build_segment_model(*prev, obs, focal_px, o.pose);
+        vnhv_model_ = control::build_segment_model(*prev, obs, focal_px, vnhv_pose_);
       }
     }
     // One segment unit is the chord IP -> IN; a straight segment's taught length is its chord.
@@ -405,11 +412,12 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
                          has_command_ ? last_command_.omega_rad_s : 0.0, tel.t_ns,
                          vnhv_curvature_1_m_);
   }
+  tel.vnhv_model_points = vnhv_model_ ? static_cast<int>(vnhv_model_->point_by_corner.size()) : 0;
   if (!vnhv_model_) return std::nullopt;
   const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
   bool past_next = false;
   if (const auto fix =
-          control::locate_in_segment(*vnhv_model_, corner_observations(tv_n), focal_px, o.pose)) {
+          control::locate_in_segment(*vnhv_model_, corner_observations(tv_n), focal_px, vnhv_pose_)) {
     const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
     const bool arc = vnhv_curvature_1_m_ != 0.0;
     // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.

@@ -131,6 +131,9 @@ template <class V> void visit(V& v, cc::VnhvOptions& o) {
   v("teach_speed_m_s", o.teach_speed_m_s);
   v("max_segment_turn_rad", o.max_segment_turn_rad);
   v("max_arc_turn_rad", o.max_arc_turn_rad);
+  v("straight_min_parallax_rad", o.straight_min_parallax_rad);
+  v("straight_min_points", o.straight_min_points);
+  v("straight_min_length_m", o.straight_min_length_m);
   v.group("pose", [&](V& s) {
     s("min_parallax_rad", o.pose.min_parallax_rad);
     s("max_reprojection_px", o.pose.max_reprojection_px);

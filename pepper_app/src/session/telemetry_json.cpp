@@ -53,6 +53,7 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"used_points", t.used_points},
       {"vnhv_lateral_m", num(t.vnhv_lateral_m)},
       {"vnhv_heading_rad", num(t.vnhv_heading_rad)},
+      {"vnhv_model_points", t.vnhv_model_points},
       {"omega_demand_rad_s", num(t.omega_demand_rad_s)},
       {"turning", t.turning},
       {"hold_elapsed_ns", t.hold_elapsed_ns},

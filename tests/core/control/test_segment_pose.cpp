@@ -117,7 +117,7 @@ TEST(SegmentPose, ResectionRejectsOutliers) {
   EXPECT_NEAR(fix->pose.y_m, truth.y_m, 0.02);
   EXPECT_NEAR(fix->pose.yaw_rad, truth.yaw_rad, 0.005);
   // Too few points for min_points: no pose.
-  const std::vector<cv::Vec3d> few(X.begin(), X.begin() + 11);
+  const std::vector<cv::Vec3d> few(X.begin(), X.begin() + (o.min_points - 1));
   const std::vector<cv::Point2d> few_x = observe(truth, few, 0.0, 7);
   EXPECT_FALSE(planar_resection(few, few_x, kFocalPx, o));
 }
@@ -184,7 +184,7 @@ TEST(SegmentPose, ArcFitRecoversTheSegment) {
     ASSERT_TRUE(model);
     EXPECT_GT(model->point_by_corner.size(), 60u);
   }
-  std::vector<CornerObservation> few(11);
+  std::vector<CornerObservation> few(static_cast<size_t>(o.min_points - 1));
   EXPECT_FALSE(fit_arc_segment(few, kFocalPx, o));
 }
 

@@ -203,15 +203,17 @@ TEST(VnhvLaw, ValidateNamesBadFields) {
   o.kd_1_m = 0.0;
   o.max_abs_theta_rad = 2.0;
   o.teach_speed_m_s = 0.0;
+  o.straight_min_points = 2;
   o.pose.min_points = 2;
   o.filter.gate_chi2 = -1.0;
   const auto e = o.validate();
-  ASSERT_EQ(e.size(), 5u);
+  ASSERT_EQ(e.size(), 6u);
   EXPECT_NE(e[0].find("kd_1_m"), std::string::npos);
   EXPECT_NE(e[1].find("max_abs_theta_rad"), std::string::npos);
   EXPECT_NE(e[2].find("teach_speed_m_s"), std::string::npos);
-  EXPECT_NE(e[3].find("pose.min_points"), std::string::npos);
-  EXPECT_NE(e[4].find("filter.gate_chi2"), std::string::npos);
+  EXPECT_NE(e[3].find("straight_min_points"), std::string::npos);
+  EXPECT_NE(e[4].find("pose.min_points"), std::string::npos);
+  EXPECT_NE(e[5].find("filter.gate_chi2"), std::string::npos);
 }
 
 }  // namespace

@@ -257,6 +257,9 @@ TEST(Navigator, SingleModalitySeesOnlyItsKind) {
       EXPECT_FALSE(r.telemetry.used_points);
       lines_used += r.telemetry.used_lines ? 1 : 0;
       vnhv_estimates += std::isfinite(r.telemetry.vnhv_lateral_m) ? 1 : 0;
+      // No points, no segment model: 0 with VNHV (IBVS steers), -1 when IBVS is the controller.
+      if (controller == ControllerKind::kIbvs) EXPECT_EQ(r.telemetry.vnhv_model_points, -1);
+      else EXPECT_LE(r.telemetry.vnhv_model_points, 0);
     }
     EXPECT_GT(lines_used, 40) << to_string(controller);
     EXPECT_EQ(vnhv_estimates, 0) << to_string(controller);
@@ -311,6 +314,10 @@ ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
     last_in = r.telemetry.in;
     out.switches += r.telemetry.switched ? 1 : 0;
     out.vnhv_frames += std::isfinite(r.telemetry.vnhv_lateral_m) ? 1 : 0;
+    if (std::isfinite(r.telemetry.vnhv_lateral_m)) {  // an estimate needs a segment model
+      EXPECT_GE(r.telemetry.vnhv_model_points,
+                std::min(options.vnhv.pose.min_points, options.vnhv.straight_min_points));
+    }
     EXPECT_TRUE(std::isfinite(r.command.omega_rad_s));
     const double w = r.command.omega_rad_s, v = r.command.v_m_s;  // exact unicycle arc
     if (std::abs(w) < 1e-9) {

@@ -56,7 +56,22 @@ struct VnhvOptions {
   /// room_corridor_room 10/10 at lateral RMS 2.8 cm, max 11.8 (0 and Kp 4, Kd 4: 6.5 / 23.0);
   /// robotics_room 10/10, 3.5 / 10.8 (3.4 / 9.8); README "Closed-loop evaluation".
   double max_arc_turn_rad = 1.0;
+  /// Reconstruction and resection (segment_pose.hpp) of turning segments (followed on their
+  /// arc); straight segments relax two of its settings, below.
   SegmentPoseOptions pose;
+  /// Long straight segments (|turn| <= max_segment_turn_rad, taught length >=
+  /// straight_min_length_m): triangulation parallax, rad, > 0, and points (model and resection
+  /// inliers), >= 3, instead of pose's. Why lower: in white_corridor, whose corners are mostly
+  /// far down the corridor, 3-7 of a segment's 16-25 points had pose's 0.02 rad, no segment had a
+  /// model, IBVS drove the whole tour and a 17 cm start offset came within 5 cm only after 20 m
+  /// (VGA, seed 1, run 2 of 10; with these 1.7 m). Why not on every segment: robotics_room's
+  /// first corner is cut into 0.08 m key-image steps before the turn; with the light change they
+  /// got models from few points, VNHV held the robot straight there (IBVS already turns towards
+  /// INN), the switches came late and 8 of 10 runs were lost at 5.8-6.2 m. 0.01 rad is 5.6 px
+  /// at VGA. README "Closed-loop evaluation".
+  double straight_min_parallax_rad = 0.01;
+  int straight_min_points = 6;
+  double straight_min_length_m = 0.5;  ///< m, >= 0
   DeviationFilterOptions filter;
 
   std::vector<std::string> validate() const;

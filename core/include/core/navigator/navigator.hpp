@@ -210,6 +210,7 @@ class Navigator {
   std::optional<control::SegmentModel> vnhv_model_;
   double vnhv_m_per_unit_ = 0.0;  ///< metres per segment unit (the chord IP -> IN)
   double vnhv_curvature_1_m_ = 0.0;  ///< the segment's taught arc; 0: the chord IP -> IN
+  control::SegmentPoseOptions vnhv_pose_;  ///< the segment's reconstruction and resection settings
   control::DeviationFilter vnhv_filter_;
   // Speed: the verified point matches of the previous frame per key image of the segment, the
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the

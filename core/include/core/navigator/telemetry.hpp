@@ -65,6 +65,9 @@ struct Telemetry {
   double J_L = kNaN, J_P = kNaN;
   bool used_lines = false, used_points = false;
   double vnhv_lateral_m = kNaN, vnhv_heading_rad = kNaN;
+  /// Triangulated points of the VNHV model of the current segment; 0: no model (IBVS drives);
+  /// -1: VNHV is not the controller.
+  int vnhv_model_points = -1;
   double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
   bool turning = false;
   int64_t hold_elapsed_ns = 0;  ///< time since the last usable control, when holding
