@@ -378,13 +378,13 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     vnhv_filter_.reset();
     vnhv_model_.reset();
     vnhv_pose_ = o.pose;
+    const double taught_m = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
     const features::TwoViewMatches next_prev =
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
       const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);
       const double turn_rad = prev ? std::abs(prev->yaw_rad) : 0.0;
-      const double taught_m = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
       if (prev && turn_rad <= o.max_segment_turn_rad && taught_m >= o.straight_min_length_m) {
         // A long straight segment: distant points count too.
         vnhv_pose_.min_parallax_rad = o.straight_min_parallax_rad;
@@ -395,7 +395,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       }
     }
     // One segment unit is the chord IP -> IN; a straight segment's taught length is its chord.
-    vnhv_m_per_unit_ = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
+    vnhv_m_per_unit_ = taught_m;
     vnhv_curvature_1_m_ = 0.0;
     if (vnhv_model_ && std::abs(vnhv_model_->prev_in_next.yaw_rad) > o.max_segment_turn_rad) {
       // A turning segment follows its arc. The taught duration gives the arc's length: metres
