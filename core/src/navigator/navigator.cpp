@@ -85,8 +85,9 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
   check(arrival_min_scale_points >= 3, "arrival_min_scale_points", arrival_min_scale_points,
         ">= 3");
-  check(blind_switch_min_time_fraction >= 0.0 && blind_switch_min_time_fraction <= 1.0,
-        "blind_switch_min_time_fraction", blind_switch_min_time_fraction, "0 (off) or in (0, 1]");
+  check(blind_switch_min_driven_fraction >= 0.0 && blind_switch_min_driven_fraction <= 1.0,
+        "blind_switch_min_driven_fraction", blind_switch_min_driven_fraction,
+        "0 (off) or in (0, 1]");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
         static_cast<double>(segment_overdue_min_ns), ">= 0");
@@ -214,6 +215,7 @@ void Navigator::reset() {
   vnhv_segment_next_ = -1;
   segment_start_t_ns_.reset();
   segment_from_switch_ = false;
+  segment_driven_m_ = 0.0;
   final_ratio_in_ = -1;
   klt_priors_.clear();
 }
@@ -256,10 +258,11 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
   return localization::quantile_ratio(ratios, options_.scale_quantile);
 }
 
-bool Navigator::blind_switch_allowed(int64_t t_ns) const {
-  const double fraction = options_.blind_switch_min_time_fraction;
+bool Navigator::blind_switch_allowed() const {
+  const double fraction = options_.blind_switch_min_driven_fraction;
   if (fraction <= 0.0 || !segment_from_switch_ || !switcher_ || !segment_start_t_ns_) return true;
-  return static_cast<double>(t_ns - *segment_start_t_ns_) >= fraction * segment_taught_ns();
+  const double taught_m = segment_taught_ns() * 1e-9 * options_.vnhv.teach_speed_m_s;
+  return segment_driven_m_ >= fraction * taught_m;
 }
 
 double Navigator::segment_taught_ns() const {
@@ -459,6 +462,10 @@ StepResult Navigator::step(const Frame& frame) {
     throw std::invalid_argument("Navigator::step: t_ns " + std::to_string(frame.t_ns) +
                                 " is before the previous frame's " + std::to_string(*last_t_ns_));
   }
+  if (last_t_ns_ && has_command_ && !last_command_.stop) {
+    // The command sent after the previous frame drove the robot until now (blind switches).
+    segment_driven_m_ += last_command_.v_m_s * static_cast<double>(frame.t_ns - *last_t_ns_) * 1e-9;
+  }
   last_t_ns_ = frame.t_ns;
 
   StepResult out;
@@ -503,6 +510,7 @@ StepResult Navigator::step(const Frame& frame) {
     }
     segment_start_t_ns_ = frame.t_ns;
     segment_from_switch_ = false;
+    segment_driven_m_ = 0.0;
     final_ratio_in_ = -1;  // a new segment: no ratio seen on it yet
   }
 
@@ -516,7 +524,7 @@ StepResult Navigator::step(const Frame& frame) {
     tel.n_points_next = tv_n.n_points();
     localization::SwitchCounts counts;
     counts.two_view_next = tv_n.total();
-    counts.blind_switch_allowed = blind_switch_allowed(frame.t_ns);
+    counts.blind_switch_allowed = blind_switch_allowed();
     bool reached_final = false;
     const int min_points =
         seg.next_next ? options_.min_scale_points : options_.arrival_min_scale_points;
@@ -577,6 +585,7 @@ StepResult Navigator::step(const Frame& frame) {
       ensure_pyramids(switcher_->segment());
       segment_start_t_ns_ = frame.t_ns;
       segment_from_switch_ = true;
+      segment_driven_m_ = 0.0;
     }
     if (segment_overdue(frame.t_ns)) {
       state_ = NavState::kOverdue;

@@ -174,43 +174,60 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
   EXPECT_EQ(off.back().command.reason, StopReason::kFeaturesLost);
 }
 
-// Blind switches wait for the taught time: the taught frames replayed 2x faster than taught,
-// with the scale ratio never measurable (min_scale_points out of reach, no line ratio). With
-// blind_switch_min_time_fraction = 0.6 every switch after the first comes at least 0.6 x the
-// taught IP -> IN time after the previous one; without the rule some come sooner (so the check
-// bites).
-TEST(Navigator, BlindSwitchesWaitForTheTaughtTimeOnTheSegment) {
+// Blind switches wait until the commands have driven part of the segment: the taught frames
+// replayed 2x faster than taught, with the scale ratio never measurable (min_scale_points out of
+// reach, no line ratio). With blind_switch_min_driven_fraction = 0.6 every switch after the
+// first comes once the commanded v, integrated over the frame stamps, covers 0.6 x the taught
+// IP -> IN length (taught time x vnhv.teach_speed_m_s); without the rule some come sooner (so
+// the check bites). teach_speed_m_s = 0.125: at 0.15 m/s and 2x the frame rate the guard opens
+// when the frames reach IN (0.6 x 0.125 = 0.5 x 0.15).
+TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
+  struct Gap {
+    double driven_m;
+    double taught_m;
+  };
   auto switch_gaps = [](double fraction) {
     NavigatorOptions o;
     o.min_scale_points = 100'000;
     o.arrival_min_scale_points = 100'000;
     o.min_scale_lines = 0;
-    o.blind_switch_min_time_fraction = fraction;
+    o.blind_switch_min_driven_fraction = fraction;
+    o.vnhv.teach_speed_m_s = 0.125;
     Navigator nav(tour().map, o);
     const auto& keys = tour().map.key_images;
     const int64_t t0 = tour().frames.front().t_ns;
-    std::vector<std::pair<int64_t, int64_t>> gaps;  // (time on the segment, taught time)
-    std::optional<int64_t> last_switch;
+    std::vector<Gap> gaps;
+    double driven_m = 0.0;
+    bool started = false;
+    Command last;
+    int64_t last_t_ns = t0;
     int ip = -1, in = -1;
     for (const Frame& taught : tour().frames) {
       Frame f = taught;
       f.t_ns = t0 + (taught.t_ns - t0) / 2;
+      if (!last.stop) driven_m += last.v_m_s * static_cast<double>(f.t_ns - last_t_ns) * 1e-9;
       const StepResult r = nav.step(f);
-      if (r.telemetry.switched && last_switch) {
-        gaps.emplace_back(f.t_ns - *last_switch, keys[in].t_ns - keys[ip].t_ns);
+      if (r.telemetry.switched && started) {
+        gaps.push_back({driven_m, static_cast<double>(keys[in].t_ns - keys[ip].t_ns) * 1e-9 *
+                                      o.vnhv.teach_speed_m_s});
       }
-      if (r.telemetry.switched) last_switch = f.t_ns;
+      if (r.telemetry.switched) {
+        started = true;
+        driven_m = 0.0;
+      }
       ip = r.telemetry.ip;
       in = r.telemetry.in;
+      last = r.command;
+      last_t_ns = f.t_ns;
     }
     return gaps;
   };
   const auto guarded = switch_gaps(0.6);
   ASSERT_GE(guarded.size(), 3u);
-  for (const auto& [spent, taught] : guarded) EXPECT_GE(spent, 0.6 * taught);
+  for (const Gap& g : guarded) EXPECT_GE(g.driven_m, 0.6 * g.taught_m - 1e-9);
   const auto free = switch_gaps(0.0);
   int sooner = 0;
-  for (const auto& [spent, taught] : free) sooner += spent < 0.6 * taught ? 1 : 0;
+  for (const Gap& g : free) sooner += g.driven_m < 0.6 * g.taught_m ? 1 : 0;
   EXPECT_GT(sooner, 0);
 }
 

@@ -132,14 +132,18 @@ struct NavigatorOptions {
   /// its taught time and 9.7 s (white_corridor); 10 s / 4x stopped good runs there. 20 s / 6x
   /// leaves twice that margin (3 m at replay speed). factor 0: off. factor >= 0, min_ns >= 0.
   /// Blind switches: while the scale ratio with IN is unknown (too few points), a switch is
-  /// allowed only after this fraction of the taught IP -> IN time has passed on a segment that
-  /// began with a switch (not after a (re)localisation, where the robot may start anywhere on
-  /// it). Why: in feature-poor stretches the paper's count rules fire on noise; measured in
-  /// white_corridor (VGA, seed 1, run 10 of 10) three switches came 4-6 frames apart, the
-  /// segment then was 2.7 m ahead of the robot and the overdue rule stopped it. Replay (0.15
-  /// m/s) is slower than the shipped worlds' teach drives (0.2-0.25 m/s), so a segment takes
-  /// longer to replay than it took to teach. 0: off, else in (0, 1].
-  double blind_switch_min_time_fraction = 0.3;
+  /// allowed only once the commanded forward speed, integrated over the frame stamps since the
+  /// segment began, has covered this fraction of the segment's taught length (taught IP -> IN
+  /// time x vnhv.teach_speed_m_s), on a segment that began with a switch (not after a
+  /// (re)localisation, where the robot may start anywhere on it). Why: in feature-poor
+  /// stretches the paper's count rules fire on noise. Measured in white_corridor (VGA, seed 1):
+  /// run 10 of session 8, three switches 4-6 frames apart; run 7 with the light change of
+  /// session 10, seven blind switches in a row, each after 0.1-0.37 m of 0.3-0.9 m segments, left
+  /// the robot 1.6 m behind IP and the overdue rule stopped it. The earlier rule (0.3 of the
+  /// taught time) let a switch through after 0.18 of the taught length at replay's 0.15 m/s
+  /// (teach drives run at 0.2-0.25 m/s) and after 0.1 in turns (0.08 m/s): replay speed
+  /// decides, so the guard counts distance. 0: off, else in (0, 1].
+  double blind_switch_min_driven_fraction = 0.6;
   double segment_overdue_factor = 6.0;
   int64_t segment_overdue_min_ns = 20'000'000'000;
   std::vector<std::string> validate() const;
@@ -169,8 +173,8 @@ class Navigator {
   void localize(features::FrameMatcher& fm, Telemetry& tel);
   /// True when the current segment has lasted longer than segment_overdue_* allow at t_ns.
   bool segment_overdue(int64_t t_ns) const;
-  /// blind_switch_min_time_fraction: whether a switch without a scale ratio is allowed at t_ns.
-  bool blind_switch_allowed(int64_t t_ns) const;
+  /// blind_switch_min_driven_fraction: whether a switch without a scale ratio is allowed now.
+  bool blind_switch_allowed() const;
   /// Teach time between IP and IN of the current segment (map t_ns), ns; needs a segment.
   double segment_taught_ns() const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
@@ -198,6 +202,8 @@ class Navigator {
   int64_t last_good_t_ns_ = 0;
   std::optional<int64_t> segment_start_t_ns_;  ///< frame time when the current segment began
   bool segment_from_switch_ = false;  ///< the current segment began with a switch
+  /// Forward distance commanded since the current segment began (command v x frame interval), m.
+  double segment_driven_m_ = 0.0;
   std::optional<int64_t> last_t_ns_;
   // Highest scale ratio with the final image seen on the final segment (arrival_fade_ratio);
   // NaN until measured, reset whenever IN changes (final_ratio_in_: the IN it belongs to).
