@@ -23,6 +23,8 @@ std::vector<std::string> VelocityScheduleOptions::validate() const {
   check(fin(turn_exit_rad_s) && turn_exit_rad_s >= 0.0, "turn_exit_rad_s", turn_exit_rad_s, ">= 0");
   check(fin(turn_enter_rad_s) && turn_enter_rad_s > turn_exit_rad_s, "turn_enter_rad_s",
         turn_enter_rad_s, "> turn_exit_rad_s");
+  check(fin(turn_exit_hold_s) && turn_exit_hold_s >= 0.0, "turn_exit_hold_s", turn_exit_hold_s,
+        ">= 0");
   check(fin(max_omega_rad_s) && max_omega_rad_s > 0.0, "max_omega_rad_s", max_omega_rad_s, "> 0");
   check(fin(max_omega_accel_rad_s2) && max_omega_accel_rad_s2 > 0.0, "max_omega_accel_rad_s2",
         max_omega_accel_rad_s2, "> 0");
@@ -44,6 +46,7 @@ VelocitySchedule::VelocitySchedule(const VelocityScheduleOptions& options) : opt
 
 void VelocitySchedule::reset() {
   turning_ = false;
+  calm_since_ns_.reset();
   last_omega_rad_s_ = 0.0;
   last_t_ns_.reset();
 }
@@ -65,7 +68,15 @@ BaseCommand VelocitySchedule::step(double omega_demand_rad_s, int64_t t_ns) {
       std::clamp(omega_demand_rad_s, -options_.max_omega_rad_s, options_.max_omega_rad_s);
   const double max_change = options_.max_omega_accel_rad_s2 * dt_s;
   omega = std::clamp(omega, last_omega_rad_s_ - max_change, last_omega_rad_s_ + max_change);
-  turning_ = next_turning_state(turning_, omega, options_);
+  const bool turning = next_turning_state(turning_, omega, options_);
+  if (turning_ && !turning && options_.turn_exit_hold_s > 0.0) {
+    // A turn's demand dips between key images: stay slow until it has been calm for a while.
+    if (!calm_since_ns_) calm_since_ns_ = t_ns;
+    turning_ = static_cast<double>(t_ns - *calm_since_ns_) * 1e-9 < options_.turn_exit_hold_s;
+  } else {
+    turning_ = turning;
+  }
+  if (!turning_ || turning) calm_since_ns_.reset();
   last_omega_rad_s_ = omega;
   last_t_ns_ = t_ns;
   BaseCommand cmd;

@@ -156,6 +156,7 @@ template <class V> void visit(V& v, cc::VelocityScheduleOptions& o) {
   v("v_turn_m_s", o.v_turn_m_s);
   v("turn_enter_rad_s", o.turn_enter_rad_s);
   v("turn_exit_rad_s", o.turn_exit_rad_s);
+  v("turn_exit_hold_s", o.turn_exit_hold_s);
   v("max_omega_rad_s", o.max_omega_rad_s);
   v("max_omega_accel_rad_s2", o.max_omega_accel_rad_s2);
   v("first_step_dt_s", o.first_step_dt_s);

@@ -36,7 +36,9 @@ TEST(VelocitySchedule, RateLimitUsesFrameStamps) {
 }
 
 TEST(VelocitySchedule, TurnHysteresisAndSpeeds) {
-  VelocitySchedule s(no_rate_limit());
+  VelocityScheduleOptions o = no_rate_limit();
+  o.turn_exit_hold_s = 0.0;  // the thresholds alone
+  VelocitySchedule s(o);
   int64_t t = 0;
   auto step = [&](double w) { return s.step(w, t += kFrame); };
   EXPECT_DOUBLE_EQ(step(0.10).v_m_s, 0.15);  // below enter (0.15): straight
@@ -50,6 +52,28 @@ TEST(VelocitySchedule, TurnHysteresisAndSpeeds) {
   EXPECT_DOUBLE_EQ(straight.v_m_s, 0.15);
   EXPECT_FALSE(step(0.12).turning);  // between thresholds: stays straight
   EXPECT_TRUE(step(-0.15).turning);  // exactly at enter (magnitude): turning
+}
+
+// A turn ends only after |omega| has stayed at or below turn_exit_rad_s for turn_exit_hold_s
+// (frame stamps); a demand above exit in between starts the wait again.
+TEST(VelocitySchedule, TurnEndsOnlyAfterTheDemandStayedCalm) {
+  VelocityScheduleOptions o = no_rate_limit();
+  o.turn_exit_hold_s = 1.0;  // 5 frames at 5 Hz
+  VelocitySchedule s(o);
+  int64_t t = 0;
+  auto step = [&](double w) { return s.step(w, t += kFrame); };
+  EXPECT_TRUE(step(0.2).turning);
+  for (int i = 0; i < 4; ++i) {  // calm for 0.0 .. 0.6 s: still turning, still slow
+    const BaseCommand c = step(0.05);
+    EXPECT_TRUE(c.turning) << i;
+    EXPECT_DOUBLE_EQ(c.v_m_s, 0.08) << i;
+  }
+  EXPECT_TRUE(step(0.1).turning);  // above exit: the wait starts again
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(step(0.0).turning) << i;  // 0.0 .. 0.8 s
+  const BaseCommand straight = step(0.0);                           // 1.0 s calm
+  EXPECT_FALSE(straight.turning);
+  EXPECT_DOUBLE_EQ(straight.v_m_s, 0.15);
+  EXPECT_FALSE(step(0.12).turning);  // between thresholds: stays straight
 }
 
 TEST(VelocitySchedule, PureHysteresisFunction) {
@@ -74,10 +98,12 @@ TEST(VelocitySchedule, ValidateNamesBadFields) {
   EXPECT_TRUE(o.validate().empty());
   o.turn_enter_rad_s = 0.05;  // below exit
   o.v_turn_m_s = 0.2;         // above straight
+  o.turn_exit_hold_s = -1.0;
   const auto errors = o.validate();
-  ASSERT_EQ(errors.size(), 2u);
+  ASSERT_EQ(errors.size(), 3u);
   EXPECT_NE(errors[0].find("v_turn_m_s"), std::string::npos);
   EXPECT_NE(errors[1].find("turn_enter_rad_s"), std::string::npos);
+  EXPECT_NE(errors[2].find("turn_exit_hold_s"), std::string::npos);
   EXPECT_THROW(VelocitySchedule{o}, std::invalid_argument);
 }
 

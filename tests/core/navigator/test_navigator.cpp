@@ -179,8 +179,8 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
 // reach, no line ratio). With blind_switch_min_driven_fraction = 0.6 every switch after the
 // first comes once the commanded v, integrated over the frame stamps, covers 0.6 x the taught
 // IP -> IN length (taught time x vnhv.teach_speed_m_s); without the rule some come sooner (so
-// the check bites). teach_speed_m_s = 0.125: at 0.15 m/s and 2x the frame rate the guard opens
-// when the frames reach IN (0.6 x 0.125 = 0.5 x 0.15).
+// the check bites). teach_speed_m_s = 0.1: at 0.15 m/s and 2x the frame rate the guard opens
+// on a straight when the frames are 0.8 of the way to IN (0.6 x 0.1 = 0.8 x 0.5 x 0.15).
 TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
   struct Gap {
     double driven_m;
@@ -192,7 +192,7 @@ TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
     o.arrival_min_scale_points = 100'000;
     o.min_scale_lines = 0;
     o.blind_switch_min_driven_fraction = fraction;
-    o.vnhv.teach_speed_m_s = 0.125;
+    o.vnhv.teach_speed_m_s = 0.1;
     Navigator nav(tour().map, o);
     const auto& keys = tour().map.key_images;
     const int64_t t0 = tour().frames.front().t_ns;

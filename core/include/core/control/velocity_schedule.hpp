@@ -26,6 +26,9 @@ struct VelocityScheduleOptions {
   double v_turn_m_s = 0.08;              ///< METHOD.md (paper value), in [0, v_straight_m_s]
   double turn_enter_rad_s = 0.15;        ///< |omega| at which turning starts, > turn_exit_rad_s
   double turn_exit_rad_s = 0.08;         ///< |omega| at which turning ends, >= 0
+  /// Turning ends only once |omega| has stayed <= turn_exit_rad_s this long (frame stamps), s;
+  /// 0: at once. >= 0.
+  double turn_exit_hold_s = 1.0;
   double max_omega_rad_s = 0.6;          ///< saturation, > 0 (Pepper allows 1.0 by default)
   double max_omega_accel_rad_s2 = 0.75;  ///< rate limit, > 0 (Pepper's MaxAccTheta default)
   double first_step_dt_s = 0.2;          ///< interval assumed for the first step (5 Hz), > 0
@@ -54,6 +57,7 @@ class VelocitySchedule {
  private:
   VelocityScheduleOptions options_;
   bool turning_ = false;
+  std::optional<int64_t> calm_since_ns_;  ///< while turning: first stamp of |omega| <= exit
   double last_omega_rad_s_ = 0.0;
   std::optional<int64_t> last_t_ns_;
 };

@@ -68,8 +68,8 @@ struct SwitchCounts {
   /// Apparent scale of IN's verified points in Ia (median_scale_ratio), NaN when unknown.
   double next_scale_ratio = std::numeric_limits<double>::quiet_NaN();
   /// With an unknown next_scale_ratio the guard cannot judge; this is the caller's verdict
-  /// instead (the navigator: enough time spent on the segment, NavigatorOptions::
-  /// blind_switch_min_time_fraction). true: the paper's rules decide alone.
+  /// instead (the navigator: the commands drove enough of the segment, NavigatorOptions::
+  /// blind_switch_min_driven_fraction). true: the paper's rules decide alone.
   bool blind_switch_allowed = true;
 };
 
