@@ -27,8 +27,9 @@ struct VelocityScheduleOptions {
   double turn_enter_rad_s = 0.15;        ///< |omega| at which turning starts, > turn_exit_rad_s
   double turn_exit_rad_s = 0.08;         ///< |omega| at which turning ends, >= 0
   /// Turning ends only once |omega| has stayed <= turn_exit_rad_s this long (frame stamps), s;
-  /// 0: at once. >= 0.
-  double turn_exit_hold_s = 1.0;
+  /// 0 (the default): at once. >= 0. 1 s was measured and not kept (docs/method/control.md
+  /// "Turns", session 11): more accurate corners, but it moved room_corridor_room's failures.
+  double turn_exit_hold_s = 0.0;
   double max_omega_rad_s = 0.6;          ///< saturation, > 0 (Pepper allows 1.0 by default)
   double max_omega_accel_rad_s2 = 0.75;  ///< rate limit, > 0 (Pepper's MaxAccTheta default)
   double first_step_dt_s = 0.2;          ///< interval assumed for the first step (5 Hz), > 0
