@@ -261,13 +261,16 @@ std::optional<double> Navigator::scale_ratio(const features::TwoViewMatches& m,
 bool Navigator::blind_switch_allowed() const {
   const double fraction = options_.blind_switch_min_driven_fraction;
   if (fraction <= 0.0 || !segment_from_switch_ || !switcher_ || !segment_start_t_ns_) return true;
-  const double taught_m = segment_taught_ns() * 1e-9 * options_.vnhv.teach_speed_m_s;
-  return segment_driven_m_ >= fraction * taught_m;
+  return segment_driven_m_ >= fraction * segment_taught_m();
 }
 
 double Navigator::segment_taught_ns() const {
   const localization::Segment& seg = switcher_->segment();
   return static_cast<double>(map_.key_images[seg.next].t_ns - map_.key_images[seg.prev].t_ns);
+}
+
+double Navigator::segment_taught_m() const {
+  return segment_taught_ns() * 1e-9 * options_.vnhv.teach_speed_m_s;
 }
 
 bool Navigator::segment_overdue(int64_t t_ns) const {
@@ -381,7 +384,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     vnhv_filter_.reset();
     vnhv_model_.reset();
     vnhv_pose_ = o.pose;
-    const double taught_m = segment_taught_ns() * 1e-9 * o.teach_speed_m_s;
+    const double taught_m = segment_taught_m();
     const features::TwoViewMatches next_prev =
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {

@@ -177,6 +177,9 @@ class Navigator {
   bool blind_switch_allowed() const;
   /// Teach time between IP and IN of the current segment (map t_ns), ns; needs a segment.
   double segment_taught_ns() const;
+  /// Taught length of the current segment: its taught time x vnhv.teach_speed_m_s (the map
+  /// keeps no odometry), m; needs a segment.
+  double segment_taught_m() const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
   /// min_points: points needed for the ratio from points (min_scale_points, or
   /// arrival_min_scale_points on the final segment).
