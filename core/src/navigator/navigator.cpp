@@ -269,6 +269,12 @@ double Navigator::segment_taught_ns() const {
   return static_cast<double>(map_.key_images[seg.next].t_ns - map_.key_images[seg.prev].t_ns);
 }
 
+void Navigator::begin_segment(int64_t t_ns, bool from_switch) {
+  segment_start_t_ns_ = t_ns;
+  segment_from_switch_ = from_switch;
+  segment_driven_m_ = 0.0;
+}
+
 double Navigator::segment_taught_m() const {
   return segment_taught_ns() * 1e-9 * options_.vnhv.teach_speed_m_s;
 }
@@ -511,9 +517,7 @@ StepResult Navigator::step(const Frame& frame) {
       return finish(stop_command(before == NavState::kLost ? StopReason::kFeaturesLost
                                                            : StopReason::kNotLocalized));
     }
-    segment_start_t_ns_ = frame.t_ns;
-    segment_from_switch_ = false;
-    segment_driven_m_ = 0.0;
+    begin_segment(frame.t_ns, /*from_switch=*/false);
     final_ratio_in_ = -1;  // a new segment: no ratio seen on it yet
   }
 
@@ -586,9 +590,7 @@ StepResult Navigator::step(const Frame& frame) {
     }
     if (tel.switched) {
       ensure_pyramids(switcher_->segment());
-      segment_start_t_ns_ = frame.t_ns;
-      segment_from_switch_ = true;
-      segment_driven_m_ = 0.0;
+      begin_segment(frame.t_ns, /*from_switch=*/true);
     }
     if (segment_overdue(frame.t_ns)) {
       state_ = NavState::kOverdue;

@@ -175,6 +175,8 @@ class Navigator {
   bool segment_overdue(int64_t t_ns) const;
   /// blind_switch_min_driven_fraction: whether a switch without a scale ratio is allowed now.
   bool blind_switch_allowed() const;
+  /// A segment starts at t_ns (by a switch, or by a (re)localisation): its clock and distance.
+  void begin_segment(int64_t t_ns, bool from_switch);
   /// Teach time between IP and IN of the current segment (map t_ns), ns; needs a segment.
   double segment_taught_ns() const;
   /// Taught length of the current segment: its taught time x vnhv.teach_speed_m_s (the map
