@@ -88,6 +88,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(blind_switch_min_driven_fraction >= 0.0 && blind_switch_min_driven_fraction <= 1.0,
         "blind_switch_min_driven_fraction", blind_switch_min_driven_fraction,
         "0 (off) or in (0, 1]");
+  check(turn_feedforward >= 0.0 && turn_feedforward <= 2.0, "turn_feedforward", turn_feedforward,
+        "in [0, 2]");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
         static_cast<double>(segment_overdue_min_ns), ">= 0");
@@ -380,6 +382,32 @@ bool Navigator::vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev,
       .has_value();
 }
 
+double Navigator::taught_turn_curvature_1_m() {
+  const localization::Segment& seg = switcher_->segment();
+  const int64_t key_pair =
+      static_cast<int64_t>(seg.prev) * static_cast<int64_t>(map_.key_images.size()) + seg.next;
+  if (const auto it = taught_curvature_by_segment_.find(key_pair);
+      it != taught_curvature_by_segment_.end()) {
+    return it->second;
+  }
+  double curvature_1_m = 0.0;
+  const double taught_m = segment_taught_m();
+  if (taught_m > 0.0) {
+    // IN's corners tracked into IP (a = IN, b = IP), as for the VNHV model, but without its
+    // planar-motion test: a turn on the spot has no parallax, and its yaw is what is wanted.
+    const features::TwoViewMatches next_prev =
+        features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
+    const auto prev = control::fit_arc_segment(corner_observations(next_prev), map_.camera.fx_px,
+                                               options_.vnhv.pose);
+    // IP's yaw in IN's frame is minus the turn from IP to IN.
+    if (prev && std::abs(prev->yaw_rad) > options_.vnhv.max_segment_turn_rad) {
+      curvature_1_m = -prev->yaw_rad / taught_m;
+    }
+  }
+  taught_curvature_by_segment_.emplace(key_pair, curvature_1_m);
+  return curvature_1_m;
+}
+
 std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetry& tel) {
   const localization::Segment& seg = switcher_->segment();
   const control::VnhvOptions& o = options_.vnhv;
@@ -604,7 +632,21 @@ StepResult Navigator::step(const Frame& frame) {
   // Control on the (possibly new) segment.
   std::optional<double> omega;
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
-  if (!omega) omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
+  if (!omega) {
+    omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
+    // Turn feed-forward where VNHV has no model of the segment (not past IN of a modelled one).
+    const bool modelless = options_.controller == ControllerKind::kVnhv && !vnhv_model_;
+    if (omega && options_.turn_feedforward > 0.0 && modelless) {
+      const double v_m_s = has_command_ ? last_command_.v_m_s : options_.schedule.v_turn_m_s;
+      const double ff = options_.turn_feedforward * taught_turn_curvature_1_m() * v_m_s;
+      // A floor in the turn's direction: IBVS's demand is kept while it turns at least as fast
+      // as the taught turn, or the other way (the robot turned past IN's view).
+      if (ff != 0.0 && std::signbit(*omega) == std::signbit(ff) && std::abs(*omega) < std::abs(ff)) {
+        tel.omega_feedforward_rad_s = ff - *omega;
+        *omega = ff;
+      }
+    }
+  }
   tel.timings.match_ms = ms_since(t0);
   {  // display only; the control law above already computed (and cached) these matches
     const int in = switcher_->segment().next;

@@ -55,6 +55,7 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"vnhv_heading_rad", num(t.vnhv_heading_rad)},
       {"vnhv_model_points", t.vnhv_model_points},
       {"omega_demand_rad_s", num(t.omega_demand_rad_s)},
+      {"omega_feedforward_rad_s", num(t.omega_feedforward_rad_s)},
       {"turning", t.turning},
       {"hold_elapsed_ns", t.hold_elapsed_ns},
       {"localization_ran", t.localization_ran},

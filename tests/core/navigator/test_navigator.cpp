@@ -6,6 +6,7 @@
 #include <cmath>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include "core/mapping/teacher.hpp"
 #include "core/navigator/navigator.hpp"
@@ -229,6 +230,53 @@ TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
   int sooner = 0;
   for (const Gap& g : free) sooner += g.driven_m < 0.6 * g.taught_m ? 1 : 0;
   EXPECT_GT(sooner, 0);
+}
+
+// turn_feedforward: where IBVS drives a segment taught as a turn and turns slower than the taught
+// curvature (IP -> IN turn over the taught length) times the last command's speed, the demand is
+// raised to that, in the turn's direction. Checked against the tour's true headings at the key
+// images; 0 turns it off.
+TEST(Navigator, TurnFeedForwardIsTheTaughtCurvatureTimesTheSpeed) {
+  auto run = [](double gain) {
+    NavigatorOptions o;
+    o.controller = ControllerKind::kVnhv;
+    o.vnhv.max_arc_turn_rad = 0.0;  // no model on a turning segment: IBVS drives them all
+    o.turn_feedforward = gain;
+    o.vnhv.teach_speed_m_s = 0.225;  // this tour: 0.045 m per 0.2 s frame
+    Navigator nav(tour().map, o);
+    std::vector<StepResult> out;
+    for (const Frame& f : tour().frames) out.push_back(nav.step(f));
+    return out;
+  };
+  const auto& keys = tour().map.key_images;
+  const std::vector<StepResult> without = run(0.0);
+  for (const StepResult& r : without) EXPECT_TRUE(std::isnan(r.telemetry.omega_feedforward_rad_s));
+  for (const double gain : {1.0, 0.5}) {
+    const std::vector<StepResult> with = run(gain);
+    int checked = 0;
+    for (size_t i = 1; i < with.size(); ++i) {
+      const Telemetry& t = with[i].telemetry;
+      const double ff = t.omega_feedforward_rad_s;
+      if (!std::isfinite(ff)) continue;
+      const auto kp = static_cast<size_t>(keys[t.ip].source_frame_index);
+      const auto kn = static_cast<size_t>(keys[t.in].source_frame_index);
+      const double turn_rad = tour().path[kn].yaw_rad - tour().path[kp].yaw_rad;
+      const double length_m = static_cast<double>(kn - kp) * 0.045;
+      const double expected = gain * turn_rad / length_m * with[i - 1].command.v_m_s;
+      EXPECT_GT(std::abs(turn_rad), 0.1) << "fed forward on a straight segment";
+      // The demand is raised to the taught rate, in the turn's direction.
+      EXPECT_NEAR(t.omega_demand_rad_s, expected, 0.2 * std::abs(expected))
+          << "gain " << gain << " frame " << i;
+      EXPECT_EQ(std::signbit(ff), std::signbit(turn_rad)) << "frame " << i;
+      const Telemetry& t0 = without[i].telemetry;
+      if (t0.ip == t.ip && t0.in == t.in) {  // same frames, same segment: the same IBVS part
+        EXPECT_NEAR(t.omega_demand_rad_s - ff, t0.omega_demand_rad_s, 1e-9) << "frame " << i;
+        EXPECT_LT(std::abs(t0.omega_demand_rad_s), std::abs(t.omega_demand_rad_s));
+      }
+      ++checked;
+    }
+    EXPECT_GE(checked, 2) << "gain " << gain;  // measured: 4 frames (gain 1), 3 (gain 0.5)
+  }
 }
 
 TEST(Navigator, NotLocalisedOnAnUnknownViewStops) {

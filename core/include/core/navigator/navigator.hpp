@@ -144,6 +144,17 @@ struct NavigatorOptions {
   /// (teach drives run at 0.2-0.25 m/s) and after 0.1 in turns (0.08 m/s): replay speed
   /// decides, so the guard counts distance. 0: off, else in (0, 1].
   double blind_switch_min_driven_fraction = 0.6;
+  /// Turn feed-forward (VNHV controller): on a segment without a VNHV model (IBVS drives it)
+  /// whose taught turn (IP's yaw w.r.t. IN, fitted once per segment from IN's corners tracked
+  /// into IP, control::fit_arc_segment) exceeds vnhv.max_segment_turn_rad, the yaw-rate demand
+  /// is raised to this gain x the taught curvature (turn / taught length, the length as in
+  /// blind_switch_min_driven_fraction) x the last command's speed whenever IBVS turns the same
+  /// way but slower; a demand the other way (the robot turned past IN's view) is kept. Why:
+  /// where a turn is cut into key images a few frames apart, IBVS's demand fades as each IN
+  /// comes into view and the heading fell behind the turn (room_corridor_room's lab doorway,
+  /// docs/method/control.md "Turns"). Not used by the IBVS controller (measured on the test
+  /// tour's closed loop: end 0.49 m off laterally against 0.40). 0: off. In [0, 2].
+  double turn_feedforward = 1.0;
   double segment_overdue_factor = 6.0;
   int64_t segment_overdue_min_ns = 20'000'000'000;
   std::vector<std::string> validate() const;
@@ -191,6 +202,9 @@ class Navigator {
   std::optional<double> ibvs_omega(features::FrameMatcher& fm, Telemetry& tel);
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
+  /// turn_feedforward: the current segment's taught curvature (> 0 left), 1/m; 0 on a segment
+  /// taught straight or without a fit. Fitted once per segment (then cached).
+  double taught_turn_curvature_1_m();
   /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
   bool vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev, double focal_px) const;
   void remember_tracks(const features::FrameMatcher& fm);
@@ -223,6 +237,9 @@ class Navigator {
   double vnhv_curvature_1_m_ = 0.0;  ///< the segment's taught arc; 0: the chord IP -> IN
   control::SegmentPoseOptions vnhv_pose_;  ///< the segment's reconstruction and resection settings
   control::DeviationFilter vnhv_filter_;
+  // turn_feedforward: taught curvature per segment, key (IP, IN) -> 1/m. A function of the map
+  // only, so it is kept across segments and resets.
+  std::unordered_map<int64_t, double> taught_curvature_by_segment_;
   // Speed: the verified point matches of the previous frame per key image of the segment, the
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
   // segment is forgotten, so it depends on the frames only.

@@ -69,6 +69,9 @@ struct Telemetry {
   /// -1: VNHV is not the controller.
   int vnhv_model_points = -1;
   double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
+  /// Part of omega_demand_rad_s fed forward from the segment's taught turn (turn_feedforward),
+  /// rad/s; NaN when none was added.
+  double omega_feedforward_rad_s = kNaN;
   bool turning = false;
   int64_t hold_elapsed_ns = 0;  ///< time since the last usable control, when holding
   // Localisation.
