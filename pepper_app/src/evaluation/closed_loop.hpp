@@ -71,7 +71,8 @@ struct EvaluationOptions {
   std::filesystem::path map_dir;    ///< where the taught map is saved (empty: a temp folder)
   core::navigator::NavigatorOptions navigator;  ///< features/controller fields are overridden
   core::mapping::KeyImageSelectorOptions key_images;  ///< teach: key-image selection rule
-  /// When set, each run writes <trace_dir>/<world>_<features>_run<k>.jsonl: per frame the ground
+  /// When set, each run writes <trace_dir>/<world>_<features>_<disturbances>_run<k>.jsonl
+  /// (disturbances: "none", or e.g. "light+person"): per frame the ground
   /// truth, the command and the navigator's telemetry (for diagnosing a failed run).
   std::filesystem::path trace_dir;
 

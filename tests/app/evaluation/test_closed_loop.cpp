@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <memory>
 
 #include "evaluation/disturbance.hpp"
@@ -67,7 +68,16 @@ TEST(ClosedLoop, ShortTourWithOneTurnConvergesFromPerturbedStarts) {
   // Re-running one start alone (--run 2) replays exactly that start: same pose, same result.
   EvaluationOptions only_second = o;
   only_second.only_runs = {2};
+  only_second.trace_dir = tmp.path() / "trace";
   const Evaluation again = evaluate(teach, small_room(), only_second);
+  // Its trace is named by world, modality, disturbances and run; one JSON line per frame after
+  // the key-image header.
+  const auto trace = tmp.path() / "trace" / (teach.world_name + "_lines+points_none_run2.jsonl");
+  std::ifstream trace_in(trace);
+  ASSERT_TRUE(trace_in) << trace;
+  int trace_lines = 0;
+  for (std::string line; std::getline(trace_in, line);) ++trace_lines;
+  EXPECT_GT(trace_lines, 10);
   ASSERT_EQ(again.runs.size(), 1u);
   EXPECT_EQ(again.runs[0].index, ev.runs[1].index);
   EXPECT_DOUBLE_EQ(again.runs[0].start_x_m, ev.runs[1].start_x_m);
