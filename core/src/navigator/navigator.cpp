@@ -90,6 +90,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
         "0 (off) or in (0, 1]");
   check(turn_feedforward >= 0.0 && turn_feedforward <= 2.0, "turn_feedforward", turn_feedforward,
         "in [0, 2]");
+  check(turn_feedforward_max_lead_rad >= 0.0, "turn_feedforward_max_lead_rad",
+        turn_feedforward_max_lead_rad, ">= 0");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
         static_cast<double>(segment_overdue_min_ns), ">= 0");
@@ -218,6 +220,7 @@ void Navigator::reset() {
   segment_start_t_ns_.reset();
   segment_from_switch_ = false;
   segment_driven_m_ = 0.0;
+  segment_turned_rad_ = 0.0;
   final_ratio_in_ = -1;
   klt_priors_.clear();
 }
@@ -275,6 +278,7 @@ void Navigator::begin_segment(int64_t t_ns, bool from_switch) {
   segment_start_t_ns_ = t_ns;
   segment_from_switch_ = from_switch;
   segment_driven_m_ = 0.0;
+  segment_turned_rad_ = 0.0;
 }
 
 double Navigator::segment_taught_m() const {
@@ -500,8 +504,11 @@ StepResult Navigator::step(const Frame& frame) {
                                 " is before the previous frame's " + std::to_string(*last_t_ns_));
   }
   if (last_t_ns_ && has_command_ && !last_command_.stop) {
-    // The command sent after the previous frame drove the robot until now (blind switches).
-    segment_driven_m_ += last_command_.v_m_s * static_cast<double>(frame.t_ns - *last_t_ns_) * 1e-9;
+    // The command sent after the previous frame drove the robot until now (blind switches,
+    // turn feed-forward).
+    const double dt_s = static_cast<double>(frame.t_ns - *last_t_ns_) * 1e-9;
+    segment_driven_m_ += last_command_.v_m_s * dt_s;
+    segment_turned_rad_ += last_command_.omega_rad_s * dt_s;
   }
   last_t_ns_ = frame.t_ns;
 
@@ -634,14 +641,33 @@ StepResult Navigator::step(const Frame& frame) {
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
   if (!omega) {
     omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
-    // Turn feed-forward where VNHV has no model of the segment (not past IN of a modelled one).
+    // Turn feed-forward where VNHV has no model of the segment (not past IN of a modelled one),
+    // on a segment entered by a switch (after a (re)localisation the robot may be anywhere on
+    // it, so the turn still to do is unknown).
     const bool modelless = options_.controller == ControllerKind::kVnhv && !vnhv_model_;
-    if (omega && options_.turn_feedforward > 0.0 && modelless) {
+    if (omega && options_.turn_feedforward > 0.0 && modelless && segment_from_switch_) {
+      const double kappa_1_m = taught_turn_curvature_1_m();
       const double v_m_s = has_command_ ? last_command_.v_m_s : options_.schedule.v_turn_m_s;
-      const double ff = options_.turn_feedforward * taught_turn_curvature_1_m() * v_m_s;
+      const double ff = options_.turn_feedforward * kappa_1_m * v_m_s;
+      // The taught turn for the distance commanded on this segment so far; the floor holds only
+      // while the commanded turn lags it, so it never adds a turn IBVS already made.
+      const double taught_turn_rad = kappa_1_m * std::min(segment_driven_m_, segment_taught_m());
+      const bool lagging = kappa_1_m > 0.0 ? segment_turned_rad_ < taught_turn_rad
+                                           : segment_turned_rad_ > taught_turn_rad;
       // A floor in the turn's direction: IBVS's demand is kept while it turns at least as fast
       // as the taught turn, or the other way (the robot turned past IN's view).
-      if (ff != 0.0 && std::signbit(*omega) == std::signbit(ff) && std::abs(*omega) < std::abs(ff)) {
+      if (ff != 0.0 && lagging && std::signbit(*omega) == std::signbit(ff) &&
+          std::abs(*omega) < std::abs(ff)) {
+        tel.omega_feedforward_rad_s = ff - *omega;
+        *omega = ff;
+      }
+      // A ceiling in the turn's direction once the commanded turn leads the taught one.
+      const double lead_rad = options_.turn_feedforward_max_lead_rad;
+      const bool leading = lead_rad > 0.0 && (kappa_1_m > 0.0
+                                                  ? segment_turned_rad_ > taught_turn_rad + lead_rad
+                                                  : segment_turned_rad_ < taught_turn_rad - lead_rad);
+      if (ff != 0.0 && leading && std::signbit(*omega) == std::signbit(ff) &&
+          std::abs(*omega) > std::abs(ff)) {
         tel.omega_feedforward_rad_s = ff - *omega;
         *omega = ff;
       }

@@ -144,17 +144,27 @@ struct NavigatorOptions {
   /// (teach drives run at 0.2-0.25 m/s) and after 0.1 in turns (0.08 m/s): replay speed
   /// decides, so the guard counts distance. 0: off, else in (0, 1].
   double blind_switch_min_driven_fraction = 0.6;
-  /// Turn feed-forward (VNHV controller): on a segment without a VNHV model (IBVS drives it)
-  /// whose taught turn (IP's yaw w.r.t. IN, fitted once per segment from IN's corners tracked
-  /// into IP, control::fit_arc_segment) exceeds vnhv.max_segment_turn_rad, the yaw-rate demand
-  /// is raised to this gain x the taught curvature (turn / taught length, the length as in
-  /// blind_switch_min_driven_fraction) x the last command's speed whenever IBVS turns the same
-  /// way but slower; a demand the other way (the robot turned past IN's view) is kept. Why:
+  /// Turn feed-forward (VNHV controller): on a segment entered by a switch, without a VNHV model
+  /// (IBVS drives it) and taught as a turn (IP's yaw w.r.t. IN, fitted once per segment from
+  /// IN's corners tracked into IP, control::fit_arc_segment, exceeds vnhv.max_segment_turn_rad),
+  /// the yaw-rate demand is raised to this gain x the taught curvature kappa (turn / taught
+  /// length, the length as in blind_switch_min_driven_fraction) x the last command's speed,
+  /// when IBVS turns the same way but slower and the yaw commanded since the segment began
+  /// (command omega over frame stamps) is short of kappa x the distance commanded (at most the
+  /// taught length). A demand the other way (the robot turned past IN's view) is kept. Why:
   /// where a turn is cut into key images a few frames apart, IBVS's demand fades as each IN
   /// comes into view and the heading fell behind the turn (room_corridor_room's lab doorway,
-  /// docs/method/control.md "Turns"). Not used by the IBVS controller (measured on the test
-  /// tour's closed loop: end 0.49 m off laterally against 0.40). 0: off. In [0, 2].
+  /// docs/method/control.md "Turns"); without the "short of" condition the floor also turned on
+  /// where IBVS had already turned sharply (first left turn: 21 cm inside). Not used by the IBVS
+  /// controller (its test tour's closed loop ended 0.49 m off laterally with it, 0.40 without).
+  /// 0: off. In [0, 2].
   double turn_feedforward = 1.0;
+  /// The other side of turn_feedforward, on the same segments: when the yaw commanded since the
+  /// segment began leads the taught turn for the distance commanded by more than this, a demand
+  /// faster than the taught rate in the turn's direction is lowered to it. Why: at the turning
+  /// speed (0.08 m/s) IBVS turns to IN's view on the spot and cut room_corridor_room's first
+  /// left turn by up to 18 cm (docs/method/control.md "Turns"). 0: no cap. >= 0, rad.
+  double turn_feedforward_max_lead_rad = 0.1;
   double segment_overdue_factor = 6.0;
   int64_t segment_overdue_min_ns = 20'000'000'000;
   std::vector<std::string> validate() const;
@@ -223,6 +233,8 @@ class Navigator {
   bool segment_from_switch_ = false;  ///< the current segment began with a switch
   /// Forward distance commanded since the current segment began (command v x frame interval), m.
   double segment_driven_m_ = 0.0;
+  /// Yaw commanded since the current segment began (command omega x frame interval), rad.
+  double segment_turned_rad_ = 0.0;
   std::optional<int64_t> last_t_ns_;
   // Highest scale ratio with the final image seen on the final segment (arrival_fade_ratio);
   // NaN until measured, reset whenever IN changes (final_ratio_in_: the IN it belongs to).
