@@ -412,6 +412,32 @@ double Navigator::taught_turn_curvature_1_m() {
   return curvature_1_m;
 }
 
+double Navigator::apply_taught_turn(double omega_rad_s, Telemetry& tel) {
+  const double kappa_1_m = taught_turn_curvature_1_m();
+  const double v_m_s = has_command_ ? last_command_.v_m_s : options_.schedule.v_turn_m_s;
+  const double ff = options_.turn_feedforward * kappa_1_m * v_m_s;
+  if (ff == 0.0 || std::signbit(omega_rad_s) != std::signbit(ff)) return omega_rad_s;
+  // The taught turn for the distance commanded on this segment so far.
+  const double taught_turn_rad = kappa_1_m * std::min(segment_driven_m_, segment_taught_m());
+  const double lead_rad = options_.turn_feedforward_max_lead_rad;
+  // Floor: IBVS turns the same way but slower while the commanded turn lags the taught one (it
+  // never adds a turn IBVS already made). A demand the other way (the robot turned past IN's
+  // view) is kept.
+  const bool lagging = kappa_1_m > 0.0 ? segment_turned_rad_ < taught_turn_rad
+                                       : segment_turned_rad_ > taught_turn_rad;
+  // Ceiling: IBVS turns the same way but faster while the commanded turn leads by > lead_rad.
+  const bool leading = lead_rad > 0.0 && (kappa_1_m > 0.0
+                                              ? segment_turned_rad_ > taught_turn_rad + lead_rad
+                                              : segment_turned_rad_ < taught_turn_rad - lead_rad);
+  const bool slower = std::abs(omega_rad_s) < std::abs(ff);
+  const bool faster = std::abs(omega_rad_s) > std::abs(ff);
+  if ((lagging && slower) || (leading && faster)) {
+    tel.omega_feedforward_rad_s = ff - omega_rad_s;
+    return ff;
+  }
+  return omega_rad_s;
+}
+
 std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetry& tel) {
   const localization::Segment& seg = switcher_->segment();
   const control::VnhvOptions& o = options_.vnhv;
@@ -646,31 +672,7 @@ StepResult Navigator::step(const Frame& frame) {
     // it, so the turn still to do is unknown).
     const bool modelless = options_.controller == ControllerKind::kVnhv && !vnhv_model_;
     if (omega && options_.turn_feedforward > 0.0 && modelless && segment_from_switch_) {
-      const double kappa_1_m = taught_turn_curvature_1_m();
-      const double v_m_s = has_command_ ? last_command_.v_m_s : options_.schedule.v_turn_m_s;
-      const double ff = options_.turn_feedforward * kappa_1_m * v_m_s;
-      // The taught turn for the distance commanded on this segment so far; the floor holds only
-      // while the commanded turn lags it, so it never adds a turn IBVS already made.
-      const double taught_turn_rad = kappa_1_m * std::min(segment_driven_m_, segment_taught_m());
-      const bool lagging = kappa_1_m > 0.0 ? segment_turned_rad_ < taught_turn_rad
-                                           : segment_turned_rad_ > taught_turn_rad;
-      // A floor in the turn's direction: IBVS's demand is kept while it turns at least as fast
-      // as the taught turn, or the other way (the robot turned past IN's view).
-      if (ff != 0.0 && lagging && std::signbit(*omega) == std::signbit(ff) &&
-          std::abs(*omega) < std::abs(ff)) {
-        tel.omega_feedforward_rad_s = ff - *omega;
-        *omega = ff;
-      }
-      // A ceiling in the turn's direction once the commanded turn leads the taught one.
-      const double lead_rad = options_.turn_feedforward_max_lead_rad;
-      const bool leading = lead_rad > 0.0 && (kappa_1_m > 0.0
-                                                  ? segment_turned_rad_ > taught_turn_rad + lead_rad
-                                                  : segment_turned_rad_ < taught_turn_rad - lead_rad);
-      if (ff != 0.0 && leading && std::signbit(*omega) == std::signbit(ff) &&
-          std::abs(*omega) > std::abs(ff)) {
-        tel.omega_feedforward_rad_s = ff - *omega;
-        *omega = ff;
-      }
+      omega = apply_taught_turn(*omega, tel);
     }
   }
   tel.timings.match_ms = ms_since(t0);

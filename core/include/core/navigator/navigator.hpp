@@ -215,6 +215,8 @@ class Navigator {
   /// turn_feedforward: the current segment's taught curvature (> 0 left), 1/m; 0 on a segment
   /// taught straight or without a fit. Fitted once per segment (then cached).
   double taught_turn_curvature_1_m();
+  /// turn_feedforward and turn_feedforward_max_lead_rad on IBVS's demand: the demand to use.
+  double apply_taught_turn(double omega_rad_s, Telemetry& tel);
   /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
   bool vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev, double focal_px) const;
   void remember_tracks(const features::FrameMatcher& fm);
