@@ -232,13 +232,10 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
     std::filesystem::create_directories(options.trace_dir);
     // One file per world, modality, disturbance set and run: several --disturbance
     // configurations in one evaluation must not overwrite each other's traces.
-    std::string disturbance = "none";
-    for (const Disturbance d : options.disturbances) {
-      disturbance = (disturbance == "none" ? "" : disturbance + "+") + to_string(d);
-    }
     const auto file = options.trace_dir /
                       (teach.world_name + "_" + std::string(feature_label(options.features)) + "_" +
-                       disturbance + "_run" + std::to_string(k + 1) + ".jsonl");
+                       disturbance_label(options.disturbances) + "_run" + std::to_string(k + 1) +
+                       ".jsonl");
     trace.open(file);
     if (!trace) throw std::runtime_error(file.string() + ": cannot open for writing");
     // First line: where each key image was taught (its ground-truth base position).

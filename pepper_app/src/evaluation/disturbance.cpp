@@ -187,6 +187,15 @@ const char* to_string(Disturbance d) {
   return "?";
 }
 
+std::string disturbance_label(const std::set<Disturbance>& disturbances) {
+  std::string out;
+  for (const Disturbance d : disturbances) {
+    if (!out.empty()) out += '+';
+    out += to_string(d);
+  }
+  return out.empty() ? "none" : out;
+}
+
 Disturbance parse_disturbance(const std::string& name) {
   for (Disturbance d : {Disturbance::kLight, Disturbance::kFurniture, Disturbance::kPerson,
                         Disturbance::kDrops, Disturbance::kLatency}) {

@@ -29,6 +29,8 @@ enum class Disturbance { kLight, kFurniture, kPerson, kDrops, kLatency };
 const char* to_string(Disturbance d);
 /// "light", "furniture", "person", "drops", "latency"; throws std::invalid_argument otherwise.
 Disturbance parse_disturbance(const std::string& name);
+/// A set of disturbances as one name: "none", "light", "light+person", ... (enum order).
+std::string disturbance_label(const std::set<Disturbance>& disturbances);
 
 struct DisturbanceOptions {
   /// Light: 0 uses the world's "replay" lighting condition; otherwise every light group of the
