@@ -483,6 +483,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
                          vnhv_curvature_1_m_);
   }
   tel.vnhv_model_points = vnhv_model_ ? static_cast<int>(vnhv_model_->point_by_corner.size()) : 0;
+  vnhv_unlocated_ = true;
   if (!vnhv_model_) return std::nullopt;
   const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
   bool past_next = false;
@@ -501,6 +502,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
   if (!est) return std::nullopt;
+  vnhv_unlocated_ = false;
   tel.vnhv_lateral_m = est->lateral_m;
   tel.vnhv_heading_rad = est->heading_rad;
   // Past IN (the switch to the next segment comes later) the line IP -> IN leads straight on
@@ -667,11 +669,12 @@ StepResult Navigator::step(const Frame& frame) {
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
   if (!omega) {
     omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
-    // Turn feed-forward where VNHV has no model of the segment (not past IN of a modelled one),
-    // on a segment entered by a switch (after a (re)localisation the robot may be anywhere on
-    // it, so the turn still to do is unknown).
-    const bool modelless = options_.controller == ControllerKind::kVnhv && !vnhv_model_;
-    if (omega && options_.turn_feedforward > 0.0 && modelless && segment_from_switch_) {
+    // Turn feed-forward where VNHV has no estimate on the segment (no model, or a model that has
+    // not located the current image; not past IN of a located one), on a segment entered by a
+    // switch (after a (re)localisation the robot may be anywhere on it, so the turn still to do
+    // is unknown).
+    const bool unlocated = options_.controller == ControllerKind::kVnhv && vnhv_unlocated_;
+    if (omega && options_.turn_feedforward > 0.0 && unlocated && segment_from_switch_) {
       omega = apply_taught_turn(*omega, tel);
     }
   }

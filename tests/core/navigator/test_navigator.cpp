@@ -288,6 +288,28 @@ TEST(Navigator, TurnFeedForwardMovesTheDemandToTheTaughtCurvatureTimesTheSpeed) 
   }
 }
 
+// With VNHV's arcs on the gentler turns, the turn feed-forward acts only on frames where VNHV has
+// no estimate of the robot on the segment (no model, or a model that has not located the image):
+// where VNHV steers, or IBVS drives past IN of a located segment, the demand is left alone.
+TEST(Navigator, TurnFeedForwardOnlyWhereVnhvHasNoEstimate) {
+  NavigatorOptions o;
+  o.controller = ControllerKind::kVnhv;
+  o.vnhv.max_arc_turn_rad = 0.3;  // sharper turns: no model, IBVS drives and is fed forward
+  o.vnhv.teach_speed_m_s = 0.08;  // as in the test above: commanded distance keeps pace in turns
+  o.turn_feedforward_max_lead_rad = 0.02;
+  Navigator nav(tour().map, o);
+  int fed = 0, located = 0;
+  for (const Frame& f : tour().frames) {
+    const Telemetry t = nav.step(f).telemetry;
+    located += std::isfinite(t.vnhv_lateral_m) ? 1 : 0;
+    if (!std::isfinite(t.omega_feedforward_rad_s)) continue;
+    ++fed;
+    EXPECT_FALSE(std::isfinite(t.vnhv_lateral_m)) << "frame " << f.index;
+  }
+  EXPECT_GT(fed, 0);
+  EXPECT_GT(located, 0);
+}
+
 TEST(Navigator, NotLocalisedOnAnUnknownViewStops) {
   Navigator nav(tour().map);
   Frame f;

@@ -144,8 +144,9 @@ struct NavigatorOptions {
   /// (teach drives run at 0.2-0.25 m/s) and after 0.1 in turns (0.08 m/s): replay speed
   /// decides, so the guard counts distance. 0: off, else in (0, 1].
   double blind_switch_min_driven_fraction = 0.6;
-  /// Turn feed-forward (VNHV controller): on a segment entered by a switch, without a VNHV model
-  /// (IBVS drives it) and taught as a turn (IP's yaw w.r.t. IN, fitted once per segment from
+  /// Turn feed-forward (VNHV controller): on a segment entered by a switch, on frames where VNHV
+  /// has no estimate (no model, or a model that has not located the image yet: IBVS drives) and
+  /// taught as a turn (IP's yaw w.r.t. IN, fitted once per segment from
   /// IN's corners tracked into IP, control::fit_arc_segment, exceeds vnhv.max_segment_turn_rad),
   /// the yaw-rate demand is raised to this gain x the taught curvature kappa (turn / taught
   /// length, the length as in blind_switch_min_driven_fraction) x the last command's speed,
@@ -163,7 +164,9 @@ struct NavigatorOptions {
   /// segment began leads the taught turn for the distance commanded by more than this, a demand
   /// faster than the taught rate in the turn's direction is lowered to it. Why: at the turning
   /// speed (0.08 m/s) IBVS turns to IN's view on the spot and cut room_corridor_room's first
-  /// left turn by up to 18 cm (docs/method/control.md "Turns"). 0: no cap. >= 0, rad.
+  /// left turn by up to 18 cm (docs/method/control.md "Turns"); there, in run 8, segments 14 ->
+  /// 16 had models that never located an image, and IBVS turned at up to 0.44 rad/s on them
+  /// (17.2 cm inside; 16.0 with these frames counted). 0: no cap. >= 0, rad.
   double turn_feedforward_max_lead_rad = 0.1;
   double segment_overdue_factor = 6.0;
   int64_t segment_overdue_min_ns = 20'000'000'000;
@@ -251,6 +254,9 @@ class Navigator {
   double vnhv_curvature_1_m_ = 0.0;  ///< the segment's taught arc; 0: the chord IP -> IN
   control::SegmentPoseOptions vnhv_pose_;  ///< the segment's reconstruction and resection settings
   control::DeviationFilter vnhv_filter_;
+  /// This frame, VNHV had no estimate of the robot on the segment: no model, or a model that
+  /// has not located the current image yet.
+  bool vnhv_unlocated_ = true;
   // turn_feedforward: taught curvature per segment, key (IP, IN) -> 1/m. A function of the map
   // only, so it is kept across segments and resets.
   std::unordered_map<int64_t, double> taught_curvature_by_segment_;
