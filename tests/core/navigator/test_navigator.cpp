@@ -295,7 +295,9 @@ TEST(Navigator, TurnFeedForwardOnlyWhereVnhvHasNoEstimate) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
   o.vnhv.max_arc_turn_rad = 0.3;  // sharper turns: no model, IBVS drives and is fed forward
-  o.vnhv.teach_speed_m_s = 0.08;  // as in the test above: commanded distance keeps pace in turns
+  // Taught lengths at the turning speed: the frames come at the tour's 0.225 m/s whatever the
+  // commands, and the commanded distance in a turn (0.08 m/s) then keeps pace with them.
+  o.vnhv.teach_speed_m_s = 0.08;
   o.turn_feedforward_max_lead_rad = 0.02;
   Navigator nav(tour().map, o);
   int fed = 0, located = 0;
