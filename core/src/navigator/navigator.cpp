@@ -386,7 +386,7 @@ bool Navigator::vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev,
       .has_value();
 }
 
-double Navigator::taught_turn_curvature_1_m() {
+double Navigator::taught_turn_curvature_1_m(const features::TwoViewMatches* next_prev) {
   const localization::Segment& seg = switcher_->segment();
   const int64_t key_pair =
       static_cast<int64_t>(seg.prev) * static_cast<int64_t>(map_.key_images.size()) + seg.next;
@@ -399,10 +399,13 @@ double Navigator::taught_turn_curvature_1_m() {
   if (taught_m > 0.0) {
     // IN's corners tracked into IP (a = IN, b = IP), as for the VNHV model, but without its
     // planar-motion test: a turn on the spot has no parallax, and its yaw is what is wanted.
-    const features::TwoViewMatches next_prev =
-        features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
-    const auto prev = control::fit_arc_segment(corner_observations(next_prev), map_.camera.fx_px,
-                                               options_.vnhv.pose);
+    std::optional<features::TwoViewMatches> matched;
+    if (!next_prev) {
+      matched = features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
+      next_prev = &*matched;
+    }
+    const auto prev = control::fit_arc_segment(corner_observations(*next_prev),
+                                               map_.camera.fx_px, options_.vnhv.pose);
     // IP's yaw in IN's frame is minus the turn from IP to IN.
     if (prev && std::abs(prev->yaw_rad) > options_.vnhv.max_segment_turn_rad) {
       curvature_1_m = -prev->yaw_rad / taught_m;
@@ -451,6 +454,8 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     const double taught_m = segment_taught_m();
     const features::TwoViewMatches next_prev =
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
+    // The turn feed-forward fits its taught turn to the same matches (once per segment).
+    if (options_.turn_feedforward > 0.0) taught_turn_curvature_1_m(&next_prev);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
       const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);

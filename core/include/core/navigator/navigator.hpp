@@ -216,8 +216,9 @@ class Navigator {
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
   /// turn_feedforward: the current segment's taught curvature (> 0 left), 1/m; 0 on a segment
-  /// taught straight or without a fit. Fitted once per segment (then cached).
-  double taught_turn_curvature_1_m();
+  /// taught straight or without a fit. Fitted once per segment (then cached), to next_prev (IN's
+  /// corners tracked into IP) when given, else to a match of its own.
+  double taught_turn_curvature_1_m(const features::TwoViewMatches* next_prev = nullptr);
   /// turn_feedforward and turn_feedforward_max_lead_rad on IBVS's demand: the demand to use.
   double apply_taught_turn(double omega_rad_s, Telemetry& tel);
   /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
