@@ -1,6 +1,8 @@
 #include "core/mapping/teacher.hpp"
 
+#include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace pepper::core::mapping {
 
@@ -31,13 +33,25 @@ void Teacher::store_key(const Stored& s) {
   memory::KeyImage k;
   k.source_frame_index = s.source_frame_index;
   k.t_ns = s.t_ns;
+  k.travelled_m = s.travelled_m;
   k.features = s.features;
   k.features.klt_pyramid.clear();  // derived; the map does not keep it
   keys_.push_back(std::move(k));
 }
 
-TeachStep Teacher::add_frame(const Frame& frame) {
+TeachStep Teacher::add_frame(const Frame& frame, double travelled_m) {
   if (finished_) throw std::invalid_argument("Teacher::add_frame after finish()");
+  // Known on every frame or on none, never decreasing (the map's rule for its key images).
+  const bool known = !std::isnan(travelled_m);
+  if (frames_ > 0 && known != !std::isnan(prev_->travelled_m)) {
+    throw std::invalid_argument(
+        "Teacher::add_frame: travelled_m must be given with every frame of a tour or with none");
+  }
+  if (known && !(std::isfinite(travelled_m) && travelled_m >= 0.0 &&
+                 (frames_ == 0 || travelled_m >= prev_->travelled_m))) {
+    throw std::invalid_argument("Teacher::add_frame: travelled_m " + std::to_string(travelled_m) +
+                                " must be finite, >= 0 and never decrease");
+  }
   if (frame.gray.empty() || frame.gray.type() != CV_8UC1) {
     throw std::invalid_argument("Teacher::add_frame: frame " + std::to_string(frame.index) +
                                 " is not a non-empty CV_8UC1 image");
@@ -50,6 +64,7 @@ TeachStep Teacher::add_frame(const Frame& frame) {
   cur.features = extractor_.extract(frame.gray, features::kPartsAll);
   cur.source_frame_index = frame.index >= 0 ? frame.index : frames_;
   cur.t_ns = frame.t_ns;
+  cur.travelled_m = travelled_m;
   cur.frame_number = frames_;
 
   TeachStep step;

@@ -111,6 +111,7 @@ uint32_t manifest_crc(json j) {
 struct ManifestKey {
   int64_t source_frame_index = -1;
   int64_t t_ns = 0;
+  double travelled_m = std::numeric_limits<double>::quiet_NaN();  // optional field
   std::string image, features;
   uint64_t image_bytes = 0, features_bytes = 0;
   uint32_t image_crc32 = 0, features_crc32 = 0;
@@ -165,6 +166,20 @@ Manifest parse_manifest(const fs::path& dir) {
       ManifestKey mk;
       mk.source_frame_index = k.at("source_frame_index").get<int64_t>();
       mk.t_ns = k.at("t_ns").get<int64_t>();
+      if (k.contains("travelled_m")) {
+        mk.travelled_m = k.at("travelled_m").get<double>();
+        const double before_m = m.keys.empty() ? 0.0 : m.keys.back().travelled_m;
+        if (!std::isfinite(mk.travelled_m) || mk.travelled_m < 0.0 ||
+            !(mk.travelled_m >= before_m)) {  // NaN before: some keys have it, some not
+          throw malformed("key image " + std::to_string(m.keys.size()) + ": travelled_m " +
+                          std::to_string(mk.travelled_m) +
+                          " must be >= 0, not below the previous key image's, and given for "
+                          "every key image or none");
+        }
+      } else if (!m.keys.empty() && !std::isnan(m.keys.back().travelled_m)) {
+        throw malformed("key image " + std::to_string(m.keys.size()) +
+                        ": travelled_m missing while earlier key images have it");
+      }
       mk.image = k.at("image").get<std::string>();
       mk.features = k.at("features").get<std::string>();
       mk.image_bytes = k.at("image_bytes").get<uint64_t>();
@@ -244,6 +259,20 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
   if (const auto errors = map.camera.validate(); !errors.empty()) {
     throw MapError(Kind::kInvalidMap, dir, dir.string() + ": camera: " + errors.front());
   }
+  // travelled_m: on every key image (>= 0, never decreasing) or on none; a map that would not
+  // load is not written.
+  const bool with_travelled = !std::isnan(map.key_images.front().travelled_m);
+  for (size_t i = 0; i < map.key_images.size(); ++i) {
+    const double d = map.key_images[i].travelled_m;
+    const double before = i == 0 ? 0.0 : map.key_images[i - 1].travelled_m;
+    const bool ok = with_travelled ? std::isfinite(d) && d >= 0.0 && d >= before : std::isnan(d);
+    if (!ok) {
+      throw MapError(Kind::kInvalidMap, dir,
+                     dir.string() + ": key image " + std::to_string(i) + ": travelled_m " +
+                         std::to_string(d) +
+                         " must be given for every key image or none, >= 0 and never decreasing");
+    }
+  }
   json parameters;
   try {
     parameters = json::parse(map.parameters_json.empty() ? "{}" : map.parameters_json);
@@ -273,17 +302,19 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
       const std::string image_name = key_name(i, ".png"), feat_name = key_name(i, ".feat");
       write_file_synced(tmp / image_name, png.data(), png.size());
       write_file_synced(tmp / feat_name, feat.data(), feat.size());
-      keys.push_back({{"source_frame_index", k.source_frame_index},
-                      {"t_ns", k.t_ns},
-                      {"image", image_name},
-                      {"image_bytes", png.size()},
-                      {"image_crc32", detail::crc32(png)},
-                      {"features", feat_name},
-                      {"features_bytes", feat.size()},
-                      {"features_crc32", detail::crc32(feat)},
-                      {"lines", f.lines.size()},
-                      {"corners", f.corners_px.size()},
-                      {"keypoints", f.keypoints.size()}});
+      json entry = {{"source_frame_index", k.source_frame_index},
+                    {"t_ns", k.t_ns},
+                    {"image", image_name},
+                    {"image_bytes", png.size()},
+                    {"image_crc32", detail::crc32(png)},
+                    {"features", feat_name},
+                    {"features_bytes", feat.size()},
+                    {"features_crc32", detail::crc32(feat)},
+                    {"lines", f.lines.size()},
+                    {"corners", f.corners_px.size()},
+                    {"keypoints", f.keypoints.size()}};
+      if (with_travelled) entry["travelled_m"] = k.travelled_m;
+      keys.push_back(std::move(entry));
     }
     json manifest = {
         {"format", kFormatName},
@@ -344,6 +375,7 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
     KeyImage key;
     key.source_frame_index = k.source_frame_index;
     key.t_ns = k.t_ns;
+    key.travelled_m = k.travelled_m;
     key.features = detail::decode_features(
         read_checked(feat_path, k.features_bytes, k.features_crc32), feat_path);
     const std::vector<uint8_t> png = read_checked(image_path, k.image_bytes, k.image_crc32);

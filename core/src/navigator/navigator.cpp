@@ -282,6 +282,12 @@ void Navigator::begin_segment(int64_t t_ns, bool from_switch) {
 }
 
 double Navigator::segment_taught_m() const {
+  // Below this the teach drive turned (nearly) on the spot: no length to scale a segment with.
+  constexpr double kMinTravelledSegmentM = 0.01;
+  const localization::Segment& seg = switcher_->segment();
+  const double driven_m =
+      map_.key_images[seg.next].travelled_m - map_.key_images[seg.prev].travelled_m;  // NaN: none
+  if (driven_m >= kMinTravelledSegmentM) return driven_m;
   return segment_taught_ns() * 1e-9 * options_.vnhv.teach_speed_m_s;
 }
 

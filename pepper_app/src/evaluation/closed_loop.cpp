@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "core/mapping/drive_odometer.hpp"
 #include "core/mapping/teacher.hpp"
 #include "evaluation/metrics.hpp"
 #include "session/telemetry_json.hpp"
@@ -115,6 +116,9 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
   const double max_t_s = 60.0 + 10.0 * world->scenario.path_length_m() /
                                     std::max(world->scenario.teach_speed_m_s, 0.05);
   double t_s = 0.0;
+  // The map keeps the distance commanded during teach (as the teach session does on a robot).
+  core::mapping::DriveOdometer odometer;
+  double v_in_force_m_s = 0.0;
   for (; !driver.done() && t_s < max_t_s; t_s += dt) {
     auto frame = bridge.next_frame(std::chrono::milliseconds(100));
     const mock::GroundTruth gt = robot.ground_truth();
@@ -122,12 +126,15 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
       throw std::runtime_error("teach drive collided with " + gt.collision->what);
     }
     if (frame) {
-      const core::mapping::TeachStep st = teacher.add_frame(*frame);
+      const core::mapping::TeachStep st =
+          teacher.add_frame(*frame, odometer.on_frame(frame->t_ns, v_in_force_m_s));
       if (st.new_key_frame) out.key_frames.push_back(*st.new_key_frame);
       out.path_m.emplace_back(gt.base.x_m, gt.base.y_m);
       ++out.frames;
     }
-    bridge.move(driver.command(gt.base, t_s));
+    const naoqi_bridge::BaseVelocity cmd = driver.command(gt.base, t_s);
+    bridge.move(cmd);
+    v_in_force_m_s = cmd.v_x_m_s;
   }
   bridge.stop();
   if (!driver.done()) throw std::runtime_error("teach drive did not finish in time");

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 
+#include "core/mapping/drive_odometer.hpp"
 #include "session/telemetry_json.hpp"
 
 namespace pepper::app {
@@ -34,6 +36,14 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
                                                     const ProgressFn& progress,
                                                     std::vector<core::mapping::TeachStep>* steps) {
   const std::size_t total = recording.frames.size();
+  // Distance driven to each frame, from the recorded commands (NaN for plain image folders).
+  std::vector<double> travelled_m(total, std::numeric_limits<double>::quiet_NaN());
+  if (recording.commands_known) {
+    core::mapping::DriveOdometer odometer;
+    for (std::size_t i = 0; i < total; ++i) {
+      travelled_m[i] = odometer.on_frame(recording.frames[i].t_ns, recording.frames[i].v_m_s);
+    }
+  }
   const core::Frame first = load_frame(recording, 0);
   const cv::Size size = first.gray.size();
   const core::CameraIntrinsics camera = camera_for(recording.camera, size);
@@ -50,6 +60,7 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
       core::memory::KeyImage key;
       key.source_frame_index = frame.index;
       key.t_ns = frame.t_ns;
+      key.travelled_m = travelled_m[i];
       key.features = extractor.extract(frame.gray);
       map.key_images.push_back(std::move(key));
       if (progress) progress(i + 1, total);
@@ -61,7 +72,7 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
   for (std::size_t i = 0; i < total; ++i) {
     const core::Frame frame = i == 0 ? first : load_frame(recording, i);
     check_size(frame, size, recording, i);
-    const core::mapping::TeachStep step = teacher.add_frame(frame);
+    const core::mapping::TeachStep step = teacher.add_frame(frame, travelled_m[i]);
     if (steps) steps->push_back(step);
     if (progress) progress(i + 1, total);
   }

@@ -1,6 +1,7 @@
 #include "session/recording.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
@@ -114,6 +115,7 @@ Recording read_recording(const fs::path& folder,
     rec.camera = camera_override ? *camera_override
                                  : camera_from_json(manifest.value("camera", json()), manifest_path);
     rec.source = manifest.value("source", "");
+    rec.commands_known = true;
     const fs::path index_path = folder / "frames.jsonl";
     std::ifstream index(index_path);
     if (!index) throw RecordingError(index_path.string() + ": missing");
@@ -138,6 +140,10 @@ Recording read_recording(const fs::path& folder,
       f.file = folder / j["file"].get<std::string>();
       f.v_m_s = j.value("v_m_s", 0.0);
       f.omega_rad_s = j.value("omega_rad_s", 0.0);
+      if (!std::isfinite(f.v_m_s) || !std::isfinite(f.omega_rad_s)) {
+        throw RecordingError(index_path.string() + ": line " + std::to_string(line_no) +
+                             ": v_m_s / omega_rad_s must be finite numbers");
+      }
       rec.frames.push_back(std::move(f));
     }
   } else {

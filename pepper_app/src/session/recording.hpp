@@ -67,6 +67,8 @@ struct Recording {
   core::CameraIntrinsics camera;
   std::string source;                 ///< where it was recorded ("plain image folder" otherwise)
   std::vector<RecordedFrame> frames;  ///< in order
+  /// Whether frames carry the commands in force (our format); a plain image folder has none.
+  bool commands_known = false;
   std::vector<std::string> warnings;  ///< e.g. a partial last index line that was skipped
 };
 

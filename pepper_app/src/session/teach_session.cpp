@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/mapping/drive_odometer.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "naoqi_bridge/mock/teach_driver.hpp"
 #include "session/recording.hpp"
@@ -99,6 +100,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     nb::BaseVelocity drive{};  // UI drive request
     Clock::time_point drive_at{};
     nb::BaseVelocity sent{};   // what the base is doing
+    core::mapping::DriveOdometer odometer;
     bool moving = false;
     auto last_frame_at = Clock::now();
     bool stalled = false;
@@ -130,6 +132,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
             driver.reset();  // a scripted drive does not resume after STOP
             stop_base("ui_stop");
             moving = false;
+            sent = {};
             break;
           case K::kStartRecording:
             recording = true;
@@ -155,6 +158,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           stalled = true;
           stop_base("frame_timeout");
           moving = false;
+          sent = {};
           result.warnings.push_back("frames stalled: base stopped");
           link.publish_state({{"stop_reason", "no camera frame for " +
                                                   std::to_string(options.frame_timeout_ms) +
@@ -171,6 +175,9 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       const double dt_s = prev_t_ns < 0 ? 0.0 : (frame->t_ns - prev_t_ns) * 1e-9;
       prev_t_ns = frame->t_ns;
 
+      // The map's distances: the commanded speed integrated over every frame (also while not
+      // recording: the base moved), as a robot without odometry access would know it.
+      const double commanded_m = odometer.on_frame(frame->t_ns, sent.v_x_m_s);
       // Distance: ground truth on the mock robot, else the commanded speed integrated.
       std::optional<Eigen::Vector2d> pos;
       if (robot.mock) {
@@ -184,7 +191,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
 
       if (recording) {
         writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
-        const core::mapping::TeachStep step = teacher->add_frame(*frame);
+        const core::mapping::TeachStep step = teacher->add_frame(*frame, commanded_m);
         if (pos) result.path_m.push_back(*pos);
         // The first frame is always key image 0 (the teacher does not report it as a new one).
         if (step.new_key_frame || step.frame_number == 0) {

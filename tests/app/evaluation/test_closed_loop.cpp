@@ -48,6 +48,10 @@ TEST(ClosedLoop, ShortTourWithOneTurnConvergesFromPerturbedStarts) {
   const TeachResult teach = teach_tour(small_room(), o);
   ASSERT_GE(teach.map.key_images.size(), 3u);
   EXPECT_NEAR(teach.length_m, 5.2, 0.4);  // 2.8 m + 2.6 m, corner cut by the pure pursuit
+  // The map keeps the distance commanded during teach: the drive's length, give or take the
+  // base's lag behind its commands.
+  EXPECT_EQ(teach.map.key_images.front().travelled_m, 0.0);
+  EXPECT_NEAR(teach.map.key_images.back().travelled_m, teach.length_m, 0.05 * teach.length_m);
   const Evaluation ev = evaluate(teach, small_room(), o);
   ASSERT_EQ(ev.runs.size(), 2u);
   for (const RunResult& r : ev.runs) {

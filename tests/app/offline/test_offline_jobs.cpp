@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <optional>
+
 #include "naoqi_bridge/mock/mock_bridge.hpp"
 #include "naoqi_bridge/mock/mock_robot.hpp"
 #include "naoqi_bridge/mock/teach_driver.hpp"
@@ -14,7 +17,11 @@ namespace {
 
 namespace mock = naoqi_bridge::mock;
 
-/// Records `frames` frames of the teach drive of `world_file` into `folder`.
+/// Ground-truth path length of the recorded drive, m (set by record_teach).
+double g_recorded_path_m = 0.0;
+
+/// Records `frames` frames of the teach drive of `world_file` into `folder`, each with the
+/// command in force while the base moved to it (the recording format's convention).
 void record_teach(const std::filesystem::path& world_file, const std::filesystem::path& folder,
                   int frames) {
   auto world = std::make_shared<const mock::World>(mock::load_world(world_file));
@@ -24,14 +31,17 @@ void record_teach(const std::filesystem::path& world_file, const std::filesystem
   const core::CameraIntrinsics camera = bridge.start_camera({0, 320, 240, 15});
   mock::TeachDriver driver(world->scenario);
   RecordingWriter writer(folder, camera, "mock:" + world_file.string());
+  naoqi_bridge::BaseVelocity in_force{};
+  std::optional<mock::Pose2D> last;
   for (int i = 0; i < frames; ++i) {
     auto frame = bridge.next_frame(std::chrono::milliseconds(1000));
     ASSERT_TRUE(frame.has_value());
     const auto truth = robot.ground_truth();
-    const naoqi_bridge::BaseVelocity cmd =
-        driver.command(truth.base, static_cast<double>(frame->t_ns) * 1e-9);
-    bridge.move(cmd);
-    writer.append(*frame, cmd.v_x_m_s, cmd.omega_rad_s);
+    if (last) g_recorded_path_m += std::hypot(truth.base.x_m - last->x_m, truth.base.y_m - last->y_m);
+    last = truth.base;
+    writer.append(*frame, in_force.v_x_m_s, in_force.omega_rad_s);
+    in_force = driver.command(truth.base, static_cast<double>(frame->t_ns) * 1e-9);
+    bridge.move(in_force);
   }
   bridge.stop();
 }
@@ -61,6 +71,11 @@ TEST_F(OfflineJobsData, MapBuildThenReplayLogOfTheSameFramesReachesTheEnd) {
   EXPECT_EQ(map.key_images.front().source_frame_index, 0);
   EXPECT_EQ(map.key_images.back().source_frame_index, 149);  // the last image is always stored
   EXPECT_LT(map.key_images.size(), 150u);                      // but not every frame
+  // The distance driven, from the recorded commands: 0 at the start, the drive's length at the
+  // end (the base lags its commands by the acceleration limit and the command latency).
+  EXPECT_EQ(map.key_images.front().travelled_m, 0.0);
+  EXPECT_GT(g_recorded_path_m, 1.5);
+  EXPECT_NEAR(map.key_images.back().travelled_m, g_recorded_path_m, 0.05 * g_recorded_path_m);
 
   core::memory::save_map(map, tmp_->path() / "map");
   auto loaded = core::memory::load_map(tmp_->path() / "map");
@@ -90,6 +105,12 @@ TEST_F(OfflineJobsData, EveryFrameKeyTakesAllImages) {
   const auto map = build_map_from_recording(first_ten, {}, true, "{}");
   ASSERT_EQ(map.key_images.size(), 10u);
   EXPECT_GT(map.key_images[3].features.lines.size(), 0u);
+  EXPECT_GT(map.key_images[9].travelled_m, map.key_images[1].travelled_m);
+  // A plain image folder has no commands: its map has no distances (not zeros).
+  Recording plain = first_ten;
+  plain.commands_known = false;
+  const auto plain_map = build_map_from_recording(plain, {}, true, "{}");
+  EXPECT_TRUE(std::isnan(plain_map.key_images[9].travelled_m));
 }
 
 }  // namespace

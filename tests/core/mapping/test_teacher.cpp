@@ -2,6 +2,9 @@
 // give the same map; key images are denser in the turn than on straight runs.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <stdexcept>
+
 #include "core/mapping/teacher.hpp"
 #include "core/navigator/test_world.hpp"
 
@@ -30,6 +33,38 @@ TEST(Teacher, OnlineAndOfflineGiveTheSameMap) {
   EXPECT_EQ(map.key_images.front().source_frame_index, 0);
   EXPECT_EQ(map.key_images.back().source_frame_index, static_cast<int64_t>(tour.frames.size()) - 1);
   EXPECT_EQ(map.camera, tour.camera);
+}
+
+// Each key image keeps the distance given with its own frame, also when the selector takes the
+// previous frame; a tour gives it with every frame or none, and never backwards.
+TEST(Teacher, KeyImagesKeepTheirFramesTravelledDistance) {
+  const auto& tour = shared_tour();
+  auto travelled_at = [](size_t i) { return 0.045 * static_cast<double>(i) + 0.001; };
+  Teacher teacher(tour.camera, tour.teach_options);
+  for (size_t i = 0; i < tour.frames.size(); ++i) teacher.add_frame(tour.frames[i], travelled_at(i));
+  const memory::VisualMemory map = teacher.finish();
+  ASSERT_GE(map.key_images.size(), 3u);
+  bool previous_frame_taken = false;
+  for (size_t k = 0; k < tour.steps.size(); ++k) {
+    if (tour.steps[k].new_key_frame && *tour.steps[k].new_key_frame != tour.steps[k].frame_number)
+      previous_frame_taken = true;
+  }
+  EXPECT_TRUE(previous_frame_taken) << "the tour should exercise the previous-frame choice";
+  for (const auto& key : map.key_images) {
+    EXPECT_EQ(key.travelled_m, travelled_at(static_cast<size_t>(key.source_frame_index)))
+        << "key image of frame " << key.source_frame_index;
+  }
+
+  Teacher mixed(tour.camera, tour.teach_options);
+  mixed.add_frame(tour.frames[0], 0.0);
+  EXPECT_THROW(mixed.add_frame(tour.frames[1]), std::invalid_argument);  // then unknown
+  Teacher backwards(tour.camera, tour.teach_options);
+  backwards.add_frame(tour.frames[0], 0.5);
+  EXPECT_THROW(backwards.add_frame(tour.frames[1], 0.4), std::invalid_argument);
+  Teacher none(tour.camera, tour.teach_options);
+  none.add_frame(tour.frames[0]);
+  none.add_frame(tour.frames[1]);
+  EXPECT_TRUE(std::isnan(none.finish().key_images[0].travelled_m));
 }
 
 TEST(Teacher, KeyImagesDenserInTheTurn) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -290,12 +291,52 @@ TEST_F(VisualMemoryTest, InterruptedSaveNeverLeavesALoadableHalfMap) {
   EXPECT_EQ(siblings, 1);
 }
 
+// The distance driven during teach: kept to the bit when the map has it, NaN when it has not
+// (maps saved before the field, plain image folders); a manifest that breaks its rules (some key
+// images without it, a decrease) is malformed even with its CRC patched to agree.
+TEST_F(VisualMemoryTest, TravelledDistanceRoundTripsOrIsUnknown) {
+  EXPECT_TRUE(std::isnan(load_map(dir_).key_images[1].travelled_m));  // SetUp's map has none
+  VisualMemory with = synthetic_map(3);
+  const double travelled_m[] = {0.0, 0.4125, 0.9};
+  for (int i = 0; i < 3; ++i) with.key_images[i].travelled_m = travelled_m[i];
+  save_map(with, dir_);
+  const VisualMemory back = load_map(dir_);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(back.key_images[i].travelled_m, travelled_m[i]);
+
+  const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
+  auto write_patched = [&](nlohmann::json j) {
+    j.erase("manifest_crc32");
+    const std::string canon = j.dump();
+    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
+    const std::string text = j.dump(2);
+    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
+  };
+  auto decreasing = manifest;
+  decreasing["key_images"][2]["travelled_m"] = 0.3;
+  write_patched(decreasing);
+  expect_error(MapError::Kind::kMalformed, "manifest.json");
+  auto partial = manifest;
+  partial["key_images"][2].erase("travelled_m");
+  write_patched(partial);
+  expect_error(MapError::Kind::kMalformed, "manifest.json");
+  write_patched(manifest);  // the patching itself is sound
+  EXPECT_EQ(load_map(dir_).key_images[2].travelled_m, 0.9);
+}
+
 TEST_F(VisualMemoryTest, InvalidMapsAreRefused) {
   EXPECT_THROW(save_map(synthetic_map(1), root_ / "one"), MapError);
   VisualMemory no_image = synthetic_map(2);
   no_image.key_images[1].features.gray.release();
   EXPECT_THROW(save_map(no_image, root_ / "no_image"), MapError);
   EXPECT_FALSE(fs::exists(root_ / "no_image"));
+  VisualMemory partial = synthetic_map(2);  // travelled_m on one key image only
+  partial.key_images[1].travelled_m = 1.0;
+  EXPECT_THROW(save_map(partial, root_ / "partial"), MapError);
+  VisualMemory decreasing = synthetic_map(2);
+  decreasing.key_images[0].travelled_m = 1.0;
+  decreasing.key_images[1].travelled_m = 0.5;
+  EXPECT_THROW(save_map(decreasing, root_ / "decreasing"), MapError);
+  EXPECT_FALSE(fs::exists(root_ / "decreasing"));
 }
 
 }  // namespace

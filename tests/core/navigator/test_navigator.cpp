@@ -312,6 +312,42 @@ TEST(Navigator, TurnFeedForwardOnlyWhereVnhvHasNoEstimate) {
   EXPECT_GT(located, 0);
 }
 
+// A map that keeps the distance driven during teach (KeyImage::travelled_m) gives the segments
+// their metric length from it, whatever vnhv.teach_speed_m_s says; without it the navigator
+// falls back to taught time x teach_speed_m_s. The tour was driven at 0.225 m/s: the same
+// commands with the right speed and no distances, as with distances and a speed 20x too high.
+TEST(Navigator, TaughtLengthsComeFromTheMapsTravelledDistance) {
+  memory::VisualMemory with_distance = tour().map;
+  const int64_t t0_ns = with_distance.key_images.front().t_ns;
+  for (auto& k : with_distance.key_images) {
+    k.travelled_m = 0.225 * static_cast<double>(k.t_ns - t0_ns) * 1e-9;
+  }
+  auto run = [&](const memory::VisualMemory& map, double teach_speed_m_s) {
+    NavigatorOptions o;
+    o.controller = ControllerKind::kVnhv;  // its lateral scale and the blind-switch guard use it
+    o.vnhv.teach_speed_m_s = teach_speed_m_s;
+    Navigator nav(map, o);
+    std::vector<StepResult> out;
+    for (const Frame& f : tour().frames) out.push_back(nav.step(f));
+    return out;
+  };
+  const auto by_time = run(tour().map, 0.225);
+  const auto by_distance = run(with_distance, 4.5);
+  const auto by_wrong_time = run(tour().map, 4.5);  // so the comparison can fail
+  ASSERT_EQ(by_time.size(), by_distance.size());
+  int differ_wrong = 0, located = 0;
+  for (size_t i = 0; i < by_time.size(); ++i) {
+    EXPECT_NEAR(by_distance[i].command.omega_rad_s, by_time[i].command.omega_rad_s, 1e-9) << i;
+    EXPECT_EQ(by_distance[i].command.v_m_s, by_time[i].command.v_m_s) << i;
+    EXPECT_EQ(by_distance[i].telemetry.in, by_time[i].telemetry.in) << i;
+    located += std::isfinite(by_time[i].telemetry.vnhv_lateral_m) ? 1 : 0;
+    if (std::abs(by_wrong_time[i].command.omega_rad_s - by_time[i].command.omega_rad_s) > 1e-6)
+      ++differ_wrong;
+  }
+  EXPECT_GT(located, 0);
+  EXPECT_GT(differ_wrong, 0) << "the taught length should matter on this tour";
+}
+
 TEST(Navigator, NotLocalisedOnAnUnknownViewStops) {
   Navigator nav(tour().map);
   Frame f;

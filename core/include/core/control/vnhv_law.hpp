@@ -13,8 +13,8 @@
 //
 // Deviations (navigator): the current camera is located in the segment's own reconstruction
 // (segment_pose.hpp: IP, IN and the current image share one scale, the segment unit |IP - IN|),
-// the lateral offset in segment units times the metres per unit (taught time IP -> IN times
-// teach_speed_m_s is the chord's length, or the arc's on a turning segment) is y; (y, theta) are filtered with the robot's commands
+// the lateral offset in segment units times the metres per unit (the taught length IP -> IN,
+// Navigator::segment_taught_m, is the chord's length, or the arc's on a turning segment) is y; (y, theta) are filtered with the robot's commands
 // (deviation_filter.hpp). A scale error in the segment length only changes the effective Kp.
 //
 // Pure functions, thread-safe. vnhv_omega returns nullopt when |theta| >= max_abs_theta_rad (the
@@ -39,9 +39,9 @@ struct VnhvOptions {
   double kp_1_m2 = 9.0;
   double kd_1_m = 6.0;  ///< Kd, 1/m, > 0: 2 sqrt(Kp) = critically damped (settles in ~1.6 m)
   double max_abs_theta_rad = 1.2;  ///< validity bound on |theta|, in (0, pi/2)
-  /// Forward speed of the teach drive, m/s, > 0: the metric length of a segment is its taught
-  /// duration (key image t_ns) times this (the map stores no odometry). The mock worlds teach at
-  /// 0.2-0.25 m/s.
+  /// Forward speed of the teach drive, m/s, > 0, for maps without odometry: there the metric
+  /// length of a segment is its taught duration (key image t_ns) times this. Maps taught by this
+  /// app keep the distance driven (KeyImage::travelled_m), which the navigator uses instead.
   double teach_speed_m_s = 0.2;
   /// Segments whose taught heading change (the arc model's |yaw of IP in IN's frame|) exceeds
   /// this are "turning": they follow their arc (max_arc_turn_rad) or, beyond that or with it

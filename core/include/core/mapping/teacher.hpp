@@ -9,13 +9,16 @@
 // frames are always key images.
 //
 // Inputs: Frame::gray CV_8UC1 of constant size; Frame::index is stored as the key image's source
-// frame index (the teach frame number when index < 0); t_ns as its stamp.
+// frame index (the teach frame number when index < 0); t_ns as its stamp; travelled_m (the
+// distance driven since the first frame, drive_odometer.hpp; NaN when unknown, then on every
+// frame) as its KeyImage::travelled_m.
 // Memory: keeps the features of the current key image and of the previous frame, plus the key
 // images themselves. Not thread-safe. Bad frames (empty, wrong type, size change) and
 // finish() with fewer than 2 frames throw std::invalid_argument; invalid options throw at
 // construction.
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -52,7 +55,10 @@ class Teacher {
  public:
   explicit Teacher(const CameraIntrinsics& camera, const TeachOptions& options = {});
 
-  TeachStep add_frame(const Frame& frame);
+  /// travelled_m: distance driven since the tour's first frame when this one was taken (given
+  /// with every frame or with none: NaN; never decreasing), kept with the frame's key image.
+  TeachStep add_frame(const Frame& frame,
+                      double travelled_m = std::numeric_limits<double>::quiet_NaN());
   /// Ends the tour: the last frame becomes the final key image. The Teacher is spent afterwards.
   memory::VisualMemory finish(const std::string& parameters_json = "{}");
 
@@ -67,6 +73,7 @@ class Teacher {
     features::ImageFeatures features;
     int64_t source_frame_index = -1;
     int64_t t_ns = 0;
+    double travelled_m = std::numeric_limits<double>::quiet_NaN();
     int64_t frame_number = 0;
   };
   void store_key(const Stored& s);

@@ -134,7 +134,7 @@ struct NavigatorOptions {
   /// Blind switches: while the scale ratio with IN is unknown (too few points), a switch is
   /// allowed only once the commanded forward speed, integrated over the frame stamps since the
   /// segment began, has covered this fraction of the segment's taught length (taught IP -> IN
-  /// time x vnhv.teach_speed_m_s), on a segment that began with a switch (not after a
+  /// length, segment_taught_m()), on a segment that began with a switch (not after a
   /// (re)localisation, where the robot may start anywhere on it). Why: in feature-poor
   /// stretches the paper's count rules fire on noise. Measured in white_corridor (VGA, seed 1):
   /// run 10 of session 8, three switches 4-6 frames apart; run 7 with the light change of
@@ -203,8 +203,10 @@ class Navigator {
   void begin_segment(int64_t t_ns, bool from_switch);
   /// Teach time between IP and IN of the current segment (map t_ns), ns; needs a segment.
   double segment_taught_ns() const;
-  /// Taught length of the current segment: its taught time x vnhv.teach_speed_m_s (the map
-  /// keeps no odometry), m; needs a segment.
+  /// Taught length of the current segment, m; needs a segment. The distance driven between IP
+  /// and IN during teach (KeyImage::travelled_m) when the map has it and it is at least
+  /// 1 cm; else the taught time x vnhv.teach_speed_m_s (maps without
+  /// odometry, turns on the spot).
   double segment_taught_m() const;
   /// Apparent scale of key_image in current (1: at the key pose), NaN-free; nullopt: unknown.
   /// min_points: points needed for the ratio from points (min_scale_points, or
