@@ -239,7 +239,8 @@ MapSummary summary_from_manifest(const Manifest& m) {
   s.final_index = m.final_index;
   s.camera = m.camera;
   for (const ManifestKey& k : m.keys) {
-    s.key_images.push_back({k.source_frame_index, k.t_ns, k.lines, k.corners, k.keypoints});
+    s.key_images.push_back(
+        {k.source_frame_index, k.t_ns, k.lines, k.corners, k.keypoints, k.travelled_m});
   }
   if (!m.keys.empty()) {
     s.taught_duration_s = static_cast<double>(m.keys.back().t_ns - m.keys.front().t_ns) * 1e-9;
@@ -411,7 +412,7 @@ MapSummary summarize(const VisualMemory& map) {
   for (const KeyImage& k : map.key_images) {
     s.key_images.push_back({k.source_frame_index, k.t_ns, static_cast<int>(k.features.lines.size()),
                             static_cast<int>(k.features.corners_px.size()),
-                            static_cast<int>(k.features.keypoints.size())});
+                            static_cast<int>(k.features.keypoints.size()), k.travelled_m});
   }
   if (!map.key_images.empty()) {
     s.taught_duration_s =
@@ -437,11 +438,22 @@ std::string MapSummary::to_text() const {
      << "camera: " << camera.width_px << "x" << camera.height_px << " fx " << std::setprecision(2)
      << camera.fx_px << " fy " << camera.fy_px << " cx " << camera.cx_px << " cy " << camera.cy_px
      << "\n";
+  if (!key_images.empty()) {
+    const double driven_m = key_images.back().travelled_m - key_images.front().travelled_m;
+    os << "driven: ";
+    if (std::isnan(driven_m)) {
+      os << "unknown (no odometry in this map: segments are measured by taught time)\n";
+    } else {
+      os << std::setprecision(2) << driven_m << " m (commanded during teach)\n";
+    }
+  }
   for (size_t i = 0; i < key_images.size(); ++i) {
     const PerKeyImage& k = key_images[i];
     os << "  #" << i << " frame " << k.source_frame_index << " t " << std::setprecision(3)
        << static_cast<double>(k.t_ns) * 1e-9 << " s: " << k.lines << " lines, " << k.corners
-       << " corners, " << k.keypoints << " keypoints\n";
+       << " corners, " << k.keypoints << " keypoints";
+    if (!std::isnan(k.travelled_m)) os << std::setprecision(2) << ", at " << k.travelled_m << " m";
+    os << "\n";
   }
   return os.str();
 }

@@ -141,6 +141,7 @@ TEST_F(VisualMemoryTest, SummaryAndMapInfo) {
   const MapSummary s2 = summarize(map_);
   EXPECT_EQ(s2.key_images[1].lines, s.key_images[1].lines);
   EXPECT_NE(s.to_text().find("key images: 3"), std::string::npos);
+  EXPECT_NE(s.to_text().find("driven: unknown"), std::string::npos);
 }
 
 TEST_F(VisualMemoryTest, TruncatedFeaturesNamed) {
@@ -302,6 +303,9 @@ TEST_F(VisualMemoryTest, TravelledDistanceRoundTripsOrIsUnknown) {
   save_map(with, dir_);
   const VisualMemory back = load_map(dir_);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(back.key_images[i].travelled_m, travelled_m[i]);
+  const MapSummary info = read_map_info(dir_);
+  EXPECT_EQ(info.key_images[1].travelled_m, 0.4125);
+  EXPECT_NE(info.to_text().find("driven: 0.90 m"), std::string::npos) << info.to_text();
 
   const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
   auto write_patched = [&](nlohmann::json j) {

@@ -109,6 +109,7 @@ struct MapSummary {
     int lines = 0;
     int corners = 0;
     int keypoints = 0;
+    double travelled_m = std::numeric_limits<double>::quiet_NaN();  ///< KeyImage::travelled_m
   };
   std::vector<PerKeyImage> key_images;
 
