@@ -131,9 +131,11 @@ SwitchUpdate KeyImageSwitcher::update(const SwitchCounts& counts, bool reached_f
         options_.min_next_scale_ratio <= 0.0 ||
         (std::isnan(ratio) ? counts.blind_switch_allowed : ratio >= options_.min_next_scale_ratio);
     if (passed) u.criteria_bits |= kCriterionPassedNext;
+    if (counts.passed_by_distance) u.criteria_bits |= kCriterionPassedByDistance;
     if (u.criterion != SwitchCriterion::kNone && !guard_ok)
       u.criteria_bits |= kCriterionGuardBlocked;
-    wanted = (u.criterion != SwitchCriterion::kNone && guard_ok) || passed;
+    wanted = (u.criterion != SwitchCriterion::kNone && guard_ok) || passed ||
+             counts.passed_by_distance;
   } else {
     wanted = reached_final;
   }

@@ -88,6 +88,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(blind_switch_min_driven_fraction >= 0.0 && blind_switch_min_driven_fraction <= 1.0,
         "blind_switch_min_driven_fraction", blind_switch_min_driven_fraction,
         "0 (off) or in (0, 1]");
+  check(blind_passed_driven_factor == 0.0 || blind_passed_driven_factor >= 1.0,
+        "blind_passed_driven_factor", blind_passed_driven_factor, "0 (off) or >= 1");
   check(turn_feedforward >= 0.0 && turn_feedforward <= 2.0, "turn_feedforward", turn_feedforward,
         "in [0, 2]");
   check(turn_feedforward_max_lead_rad >= 0.0, "turn_feedforward_max_lead_rad",
@@ -613,6 +615,11 @@ StepResult Navigator::step(const Frame& frame) {
                                        key(seg.next), fm.current(), min_points)) {
       counts.next_scale_ratio = *ratio;
       tel.next_scale_ratio = *ratio;
+    }
+    if (seg.next_next && options_.blind_passed_driven_factor > 0.0 && segment_from_switch_ &&
+        std::isnan(counts.next_scale_ratio)) {
+      counts.passed_by_distance =
+          segment_driven_m_ >= options_.blind_passed_driven_factor * segment_taught_m();
     }
     if (seg.next_next) {
       const int nn = *seg.next_next;

@@ -188,6 +188,7 @@ template <class V> void visit(V& v, cn::NavigatorOptions& o) {
   v("arrival_min_scale_points", o.arrival_min_scale_points);
   v("arrival_fade_ratio", o.arrival_fade_ratio);
   v("blind_switch_min_driven_fraction", o.blind_switch_min_driven_fraction);
+  v("blind_passed_driven_factor", o.blind_passed_driven_factor);
   v("turn_feedforward", o.turn_feedforward);
   v("turn_feedforward_max_lead_rad", o.turn_feedforward_max_lead_rad);
   v("min_scale_points", o.min_scale_points);

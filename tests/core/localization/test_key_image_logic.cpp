@@ -185,6 +185,23 @@ TEST(KeyImageSwitcher, ScaleGuardAndPassedNext) {
   EXPECT_EQ(bad.validate().size(), 1u);
 }
 
+// "Passed IN by distance": the caller says the robot drove well past IN with the scale unknown;
+// with no paper rule and no ratio, that alone makes the switch wanted (two frames, as for any).
+TEST(KeyImageSwitcher, PassedByDistanceSwitchesWithoutAnyCount) {
+  KeyImageSwitcher s(segment_ending_at(1, 6), 6);
+  SwitchCounts blind;  // nothing matched: no rule, unknown ratio
+  EXPECT_EQ(s.update(blind, false).streak, 0);
+  blind.passed_by_distance = true;
+  SwitchUpdate u = s.update(blind, false);
+  EXPECT_EQ(u.streak, 1);
+  EXPECT_EQ(u.criteria_bits, kCriterionPassedByDistance);
+  EXPECT_EQ(s.update(blind, false).event, SwitchEvent::kSwitched);
+  EXPECT_EQ(s.segment().next, 2);
+  // On the final segment the tour ends by arrival only: distance alone does not complete it.
+  KeyImageSwitcher last(segment_ending_at(5, 6), 6);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(last.update(blind, false).event, SwitchEvent::kNone);
+}
+
 TEST(MedianScaleRatio, GrowsToOneAtTheKeyPose) {
   // Points at depth 4 m seen from 1 m behind the key pose: image coordinates scale by 4/5.
   std::vector<cv::Point2d> key = {{-0.3, 0.1}, {0.2, -0.2}, {0.4, 0.3}, {-0.1, -0.35}, {0.0, 0.2}};

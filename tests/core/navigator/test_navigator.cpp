@@ -232,6 +232,67 @@ TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
   EXPECT_GT(sooner, 0);
 }
 
+// blind_passed_driven_factor: with the scale ratio unknown on every frame, a segment is left once
+// the commands drove the factor x its taught length (taught lengths made short here, 0.02 m/s x
+// taught time, so that the rule has to act before the count rules do); off, the count rules
+// alone let segments run longer.
+TEST(Navigator, PassedByDistanceLeavesASegmentOnceTheCommandsDroveIt) {
+  struct Gap {
+    double driven_m;
+    double taught_m;
+  };
+  struct Run {
+    std::vector<Gap> gaps;  // per switch after the first
+    int by_distance = 0;    // frames with criterion bit 16
+  };
+  auto run = [](double factor) {
+    NavigatorOptions o;
+    o.min_scale_points = 100'000;  // no scale ratio, ever
+    o.arrival_min_scale_points = 100'000;
+    o.min_scale_lines = 0;
+    o.blind_switch_min_driven_fraction = 0.0;
+    o.blind_passed_driven_factor = factor;
+    o.vnhv.teach_speed_m_s = 0.02;
+    Navigator nav(tour().map, o);
+    const auto& keys = tour().map.key_images;
+    Run out;
+    double driven_m = 0.0;
+    bool started = false;
+    Command last;
+    int64_t last_t_ns = tour().frames.front().t_ns;
+    int ip = -1, in = -1;
+    for (const Frame& f : tour().frames) {
+      if (!last.stop) driven_m += last.v_m_s * static_cast<double>(f.t_ns - last_t_ns) * 1e-9;
+      const StepResult r = nav.step(f);
+      if (r.telemetry.switch_criterion & localization::kCriterionPassedByDistance) ++out.by_distance;
+      if (r.telemetry.switched && started) {
+        out.gaps.push_back(
+            {driven_m, static_cast<double>(keys[in].t_ns - keys[ip].t_ns) * 1e-9 * 0.02});
+      }
+      if (r.telemetry.switched) {
+        started = true;
+        driven_m = 0.0;
+      }
+      ip = r.telemetry.ip;
+      in = r.telemetry.in;
+      last = r.command;
+      last_t_ns = f.t_ns;
+    }
+    return out;
+  };
+  const Run on = run(1.5);
+  ASSERT_GE(on.gaps.size(), 3u);
+  EXPECT_GT(on.by_distance, 0);
+  // The switch comes on the second frame past the mark (consecutive_frames 2): at most two
+  // frames of 0.15 m/s x 0.2 s beyond 1.5 x the taught length.
+  for (const Gap& g : on.gaps) EXPECT_LE(g.driven_m, 1.5 * g.taught_m + 2 * 0.15 * 0.2 + 1e-9);
+  const Run off = run(0.0);
+  EXPECT_EQ(off.by_distance, 0);
+  int later = 0;
+  for (const Gap& g : off.gaps) later += g.driven_m > 1.5 * g.taught_m + 2 * 0.15 * 0.2 ? 1 : 0;
+  EXPECT_GT(later, 0) << "the count rules alone should leave some segment later";
+}
+
 // turn_feedforward: where IBVS drives a segment taught as a turn, its demand is moved to the
 // taught curvature (IP -> IN turn over the taught length) times the last command's speed: raised
 // when IBVS turns slower while the commanded turn lags the taught one (floor), lowered when it

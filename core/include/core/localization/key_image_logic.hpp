@@ -71,12 +71,17 @@ struct SwitchCounts {
   /// instead (the navigator: the commands drove enough of the segment, NavigatorOptions::
   /// blind_switch_min_driven_fraction). true: the paper's rules decide alone.
   bool blind_switch_allowed = true;
+  /// The caller's verdict that the robot has driven well past IN while the scale ratio is
+  /// unknown (the navigator: NavigatorOptions::blind_passed_driven_factor): a switch is wanted,
+  /// as for "passed IN" (criterion bit 16).
+  bool passed_by_distance = false;
 };
 
 /// Bit set of the criteria that held: 1 three-view rule, 2 two-view rule (paper), 4 "passed IN"
 /// (SwitcherOptions::passed_next_scale_ratio), 8 blocked by the guard (min_next_scale_ratio).
 enum class SwitchCriterion : uint8_t { kNone = 0, kThreeView = 1, kTwoView = 2, kBoth = 3 };
 inline constexpr int kCriterionPassedNext = 4;
+inline constexpr int kCriterionPassedByDistance = 16;
 inline constexpr int kCriterionGuardBlocked = 8;
 
 /// Which criteria hold for one frame (pure; the paper's two rules, no guard).
