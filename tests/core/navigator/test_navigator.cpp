@@ -26,6 +26,50 @@ std::vector<StepResult> replay(const std::vector<Frame>& frames, const Navigator
   return out;
 }
 
+// Replays the tour's frames (stamps compressed by time_divisor, so the commands cover
+// 1/time_divisor of the taught distance per frame) and records, for every segment left by a
+// switch after the first, the distance commanded on it and its taught length (taught time x
+// vnhv.teach_speed_m_s; the test tour's map keeps no distances).
+struct SwitchGap {
+  double driven_m;
+  double taught_m;
+};
+struct SwitchRun {
+  std::vector<SwitchGap> gaps;
+  int by_distance = 0;  ///< frames with the "passed IN by distance" criterion bit
+};
+SwitchRun replay_switch_gaps(const NavigatorOptions& o, int64_t time_divisor) {
+  Navigator nav(tour().map, o);
+  const auto& keys = tour().map.key_images;
+  const int64_t t0 = tour().frames.front().t_ns;
+  SwitchRun out;
+  double driven_m = 0.0;
+  bool started = false;
+  Command last;
+  int64_t last_t_ns = t0;
+  int ip = -1, in = -1;
+  for (const Frame& taught : tour().frames) {
+    Frame f = taught;
+    f.t_ns = t0 + (taught.t_ns - t0) / time_divisor;
+    if (!last.stop) driven_m += last.v_m_s * static_cast<double>(f.t_ns - last_t_ns) * 1e-9;
+    const StepResult r = nav.step(f);
+    if (r.telemetry.switch_criterion & localization::kCriterionPassedByDistance) ++out.by_distance;
+    if (r.telemetry.switched && started) {
+      out.gaps.push_back({driven_m, static_cast<double>(keys[in].t_ns - keys[ip].t_ns) * 1e-9 *
+                                        o.vnhv.teach_speed_m_s});
+    }
+    if (r.telemetry.switched) {
+      started = true;
+      driven_m = 0.0;
+    }
+    ip = r.telemetry.ip;
+    in = r.telemetry.in;
+    last = r.command;
+    last_t_ns = f.t_ns;
+  }
+  return out;
+}
+
 TEST(Navigator, SameFramesGiveIdenticalCommands) {
   std::vector<Frame> frames(tour().frames.begin() + 50, tour().frames.begin() + 70);  // turn
   const auto a = replay(frames);
@@ -183,52 +227,22 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
 // the check bites). teach_speed_m_s = 0.1: at 0.15 m/s and 2x the frame rate the guard opens
 // on a straight when the frames are 0.8 of the way to IN (0.6 x 0.1 = 0.8 x 0.5 x 0.15).
 TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
-  struct Gap {
-    double driven_m;
-    double taught_m;
-  };
   auto switch_gaps = [](double fraction) {
     NavigatorOptions o;
     o.min_scale_points = 100'000;
     o.arrival_min_scale_points = 100'000;
     o.min_scale_lines = 0;
     o.blind_switch_min_driven_fraction = fraction;
+    o.blind_passed_driven_factor = 0.0;  // the guard alone
     o.vnhv.teach_speed_m_s = 0.1;
-    Navigator nav(tour().map, o);
-    const auto& keys = tour().map.key_images;
-    const int64_t t0 = tour().frames.front().t_ns;
-    std::vector<Gap> gaps;
-    double driven_m = 0.0;
-    bool started = false;
-    Command last;
-    int64_t last_t_ns = t0;
-    int ip = -1, in = -1;
-    for (const Frame& taught : tour().frames) {
-      Frame f = taught;
-      f.t_ns = t0 + (taught.t_ns - t0) / 2;
-      if (!last.stop) driven_m += last.v_m_s * static_cast<double>(f.t_ns - last_t_ns) * 1e-9;
-      const StepResult r = nav.step(f);
-      if (r.telemetry.switched && started) {
-        gaps.push_back({driven_m, static_cast<double>(keys[in].t_ns - keys[ip].t_ns) * 1e-9 *
-                                      o.vnhv.teach_speed_m_s});
-      }
-      if (r.telemetry.switched) {
-        started = true;
-        driven_m = 0.0;
-      }
-      ip = r.telemetry.ip;
-      in = r.telemetry.in;
-      last = r.command;
-      last_t_ns = f.t_ns;
-    }
-    return gaps;
+    return replay_switch_gaps(o, /*time_divisor=*/2).gaps;
   };
   const auto guarded = switch_gaps(0.6);
   ASSERT_GE(guarded.size(), 3u);
-  for (const Gap& g : guarded) EXPECT_GE(g.driven_m, 0.6 * g.taught_m - 1e-9);
+  for (const SwitchGap& g : guarded) EXPECT_GE(g.driven_m, 0.6 * g.taught_m - 1e-9);
   const auto free = switch_gaps(0.0);
   int sooner = 0;
-  for (const Gap& g : free) sooner += g.driven_m < 0.6 * g.taught_m ? 1 : 0;
+  for (const SwitchGap& g : free) sooner += g.driven_m < 0.6 * g.taught_m ? 1 : 0;
   EXPECT_GT(sooner, 0);
 }
 
@@ -237,14 +251,6 @@ TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
 // taught time, so that the rule has to act before the count rules do); off, the count rules
 // alone let segments run longer.
 TEST(Navigator, PassedByDistanceLeavesASegmentOnceTheCommandsDroveIt) {
-  struct Gap {
-    double driven_m;
-    double taught_m;
-  };
-  struct Run {
-    std::vector<Gap> gaps;  // per switch after the first
-    int by_distance = 0;    // frames with criterion bit 16
-  };
   auto run = [](double factor) {
     NavigatorOptions o;
     o.min_scale_points = 100'000;  // no scale ratio, ever
@@ -253,43 +259,22 @@ TEST(Navigator, PassedByDistanceLeavesASegmentOnceTheCommandsDroveIt) {
     o.blind_switch_min_driven_fraction = 0.0;
     o.blind_passed_driven_factor = factor;
     o.vnhv.teach_speed_m_s = 0.02;
-    Navigator nav(tour().map, o);
-    const auto& keys = tour().map.key_images;
-    Run out;
-    double driven_m = 0.0;
-    bool started = false;
-    Command last;
-    int64_t last_t_ns = tour().frames.front().t_ns;
-    int ip = -1, in = -1;
-    for (const Frame& f : tour().frames) {
-      if (!last.stop) driven_m += last.v_m_s * static_cast<double>(f.t_ns - last_t_ns) * 1e-9;
-      const StepResult r = nav.step(f);
-      if (r.telemetry.switch_criterion & localization::kCriterionPassedByDistance) ++out.by_distance;
-      if (r.telemetry.switched && started) {
-        out.gaps.push_back(
-            {driven_m, static_cast<double>(keys[in].t_ns - keys[ip].t_ns) * 1e-9 * 0.02});
-      }
-      if (r.telemetry.switched) {
-        started = true;
-        driven_m = 0.0;
-      }
-      ip = r.telemetry.ip;
-      in = r.telemetry.in;
-      last = r.command;
-      last_t_ns = f.t_ns;
-    }
-    return out;
+    return replay_switch_gaps(o, /*time_divisor=*/1);
   };
-  const Run on = run(1.5);
+  const SwitchRun on = run(1.5);
   ASSERT_GE(on.gaps.size(), 3u);
   EXPECT_GT(on.by_distance, 0);
   // The switch comes on the second frame past the mark (consecutive_frames 2): at most two
   // frames of 0.15 m/s x 0.2 s beyond 1.5 x the taught length.
-  for (const Gap& g : on.gaps) EXPECT_LE(g.driven_m, 1.5 * g.taught_m + 2 * 0.15 * 0.2 + 1e-9);
-  const Run off = run(0.0);
+  for (const SwitchGap& g : on.gaps) {
+    EXPECT_LE(g.driven_m, 1.5 * g.taught_m + 2 * 0.15 * 0.2 + 1e-9);
+  }
+  const SwitchRun off = run(0.0);
   EXPECT_EQ(off.by_distance, 0);
   int later = 0;
-  for (const Gap& g : off.gaps) later += g.driven_m > 1.5 * g.taught_m + 2 * 0.15 * 0.2 ? 1 : 0;
+  for (const SwitchGap& g : off.gaps) {
+    later += g.driven_m > 1.5 * g.taught_m + 2 * 0.15 * 0.2 ? 1 : 0;
+  }
   EXPECT_GT(later, 0) << "the count rules alone should leave some segment later";
 }
 
