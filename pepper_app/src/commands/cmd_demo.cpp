@@ -117,7 +117,8 @@ int run_demo(const DemoArgs& args) {
     ro.taught_keys_m = taught.key_m;
     // Safety cap: three times the taught frames.
     ro.max_frames = 3 * taught.frames_recorded + 300;
-    ro.give_up_lost_s = 10.0;
+    ro.give_up_lost_s = config.replay.give_up_lost_s;
+    ro.give_up_not_localised_s = config.replay.give_up_not_localised_s;
     if (ui) ro.pace_hz = 2.0 * config.robot.camera_fps;
     const ReplayResult replayed =
         run_replay_session(replay_robot, core::memory::load_map(map_dir), ro, link);

@@ -26,7 +26,7 @@ struct EvaluateArgs {
   std::vector<std::string> worlds;
   int starts = 10;
   std::string features = "both";
-  std::string controller = "ibvs";
+  std::string controller;  ///< empty: the configuration's navigator.controller
   uint64_t seed = 1;
   std::string json_out;
   std::string plots_dir;
@@ -84,11 +84,7 @@ int run_evaluate(const EvaluateArgs& a) {
       modes = {parse_features(a.features)};
     }
     for (const auto& d : a.disturbances) configs.push_back(parse_disturbance_set(d));
-    if (a.controller == "ibvs") {
-      o.controller = core::navigator::ControllerKind::kIbvs;
-    } else if (a.controller == "vnhv") {
-      o.controller = core::navigator::ControllerKind::kVnhv;
-    } else {
+    if (!a.controller.empty() && a.controller != "ibvs" && a.controller != "vnhv") {
       throw std::invalid_argument("--controller must be ibvs or vnhv, got '" + a.controller + "'");
     }
   } catch (const std::invalid_argument& e) {
@@ -96,9 +92,16 @@ int run_evaluate(const EvaluateArgs& a) {
     return 2;
   }
   try {
-    const AppConfig config = load_app_config(a.config_file, a.sets);
+    // --controller is a shorthand for --set navigator.controller=... (applied last).
+    std::vector<std::string> sets = a.sets;
+    if (!a.controller.empty()) sets.push_back("navigator.controller=" + a.controller);
+    const AppConfig config = load_app_config(a.config_file, sets);
     o.navigator = config.navigator_options();
     o.key_images = config.teach_options().selector;
+    o.head.head_yaw_rad = config.robot.head_yaw_rad;
+    o.head.head_pitch_rad = config.robot.head_pitch_rad;
+    o.give_up_lost_s = config.replay.give_up_lost_s;
+    o.give_up_not_localised_s = config.replay.give_up_not_localised_s;
   } catch (const std::exception& e) {
     std::cerr << "pepper_app evaluate: " << e.what() << "\n";
     return 2;
@@ -192,7 +195,8 @@ void register_evaluate_command(CLI::App& app) {
                   "Replay only these runs of the --starts (1-based; same starts and seeds as in "
                   "the full evaluation), e.g. --starts 10 --run 5 8 --trace DIR");
   cmd->add_option("--features", args->features, "lines, points or both")->capture_default_str();
-  cmd->add_option("--controller", args->controller, "ibvs or vnhv")->capture_default_str();
+  cmd->add_option("--controller", args->controller,
+                  "ibvs or vnhv (default: the configuration's navigator.controller)");
   cmd->add_option("--seed", args->seed, "Seed of start perturbations, noise and disturbances")
       ->capture_default_str();
   cmd->add_option("--json", args->json_out, "Write the results as JSON to this file");

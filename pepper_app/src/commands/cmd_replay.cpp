@@ -7,6 +7,7 @@
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "evaluation/closed_loop.hpp"
 #include "naoqi_bridge/mock/world.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
@@ -25,6 +26,7 @@ struct ReplayArgs {
   int64_t max_frames = 0;
   int mock_start = -1;
   uint64_t seed = 1;
+  std::string mock_lighting = "replay";
   bool wait_start = false;
   std::string mock_command_log;
 };
@@ -33,24 +35,41 @@ int run_replay(const ReplayArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
     core::memory::VisualMemory map = core::memory::load_map(a.map);
-    RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
+    const RobotConnectOptions connect = robot_connect_options(a.common, config);
+    RobotConnection robot = open_robot(a.common.robot, connect);
+    if (robot.mock && a.mock_start >= 0) {
+      // The simulated robot of `evaluate`'s run K+1 with this seed: same start, camera noise and
+      // lighting, so the two replay the same run.
+      evaluation::EvaluationOptions eo;
+      eo.seed = a.seed;
+      evaluation::MockReplaySetup setup = evaluation::mock_replay_setup(
+          robot.mock->world(), a.mock_start, a.mock_lighting, eo);
+      setup.robot.frame_rate_hz = connect.mock_frame_rate_hz;
+      setup.bridge.description = robot.url.url;
+      const RobotUrl url = robot.url;
+      const auto world = robot.mock->world_ptr();
+      robot.bridge.reset();  // it refers to the robot: gone first
+      robot.mock.reset();
+      robot = open_mock_robot(world, setup.robot, setup.bridge);
+      robot.url = url;
+      robot.mock->place(setup.start);
+    } else if (!a.mock_lighting.empty() && robot.mock) {
+      robot.mock->set_lighting(a.mock_lighting);
+    }
     ReplaySessionOptions o;
     o.camera = camera_request(config);
     o.head = head_request(config);
     o.navigator = config.navigator_options();
     o.frame_timeout_ms = config.robot.frame_timeout_ms;
     o.max_frames = a.max_frames;
+    o.give_up_lost_s = config.replay.give_up_lost_s;
+    o.give_up_not_localised_s = config.replay.give_up_not_localised_s;
     o.telemetry_jsonl = a.json_out;
     o.record_dir = a.record;
     o.wait_for_start = a.wait_start;
     o.config_json = config_to_json(config).dump();
     const bool ui_wanted = a.common.ui || a.common.ui_port >= 0;
     if (robot.mock && ui_wanted) o.pace_hz = config.robot.camera_fps;
-    if (robot.mock && a.mock_start >= 0) {
-      const auto& sc = robot.mock->world().scenario;
-      robot.mock->place(sc.replay_start(static_cast<size_t>(a.mock_start), a.seed));
-      robot.mock->set_lighting("replay");
-    }
     if (robot.mock) {  // the top view shows the taught path when the map was taught on this world
       try {
         const auto taught = load_taught_path(a.map);
@@ -117,8 +136,16 @@ void register_replay_command(CLI::App& app) {
   cmd->add_option("--max-frames", args->max_frames, "Stop after this many frames")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--mock-start", args->mock_start,
-                  "mock: robots: start from the world's replay start K (perturbed by --seed)");
-  cmd->add_option("--seed", args->seed, "Perturbation seed for --mock-start (0 = unperturbed)");
+                  "mock: robots: start where `evaluate` starts its run K+1 (the world's start, "
+                  "perturbed by --seed: up to 0.3 m sideways, 10 degrees, and along the tour), "
+                  "with the same camera noise")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--seed", args->seed, "Seed of --mock-start's perturbation and camera noise (0: the taught start, unperturbed)")
+      ->capture_default_str();
+  cmd->add_option("--mock-lighting", args->mock_lighting,
+                  "mock: robots: the world's lighting condition to replay under (teach, replay, "
+                  "... as the world file names them)")
+      ->capture_default_str();
   cmd->add_flag("--wait-start", args->wait_start, "Wait for the UI's start-replay button");
   cmd->add_option("--mock-command-log", args->mock_command_log,
                   "mock: robots: write every base command received as JSON lines here");

@@ -209,6 +209,10 @@ template <class V> void visit(V& v, RobotConfig& o) {
   v("frame_timeout_ms", o.frame_timeout_ms);
   v("user", o.user);
 }
+template <class V> void visit(V& v, ReplayConfig& o) {
+  v("give_up_lost_s", o.give_up_lost_s);
+  v("give_up_not_localised_s", o.give_up_not_localised_s);
+}
 template <class V> void visit(V& v, UiConfig& o) {
   v("port", o.port);
   v("max_v_m_s", o.max_v_m_s);
@@ -223,6 +227,7 @@ template <class V> void visit(V& v, AppConfig& o) {
   v.group("key_images", [&](V& s) { visit(s, o.key_images); });
   v.group("navigator", [&](V& s) { visit(s, o.navigator); });
   v.group("robot", [&](V& s) { visit(s, o.robot); });
+  v.group("replay", [&](V& s) { visit(s, o.replay); });
   v.group("ui", [&](V& s) { visit(s, o.ui); });
 }
 
@@ -391,6 +396,14 @@ std::vector<std::string> RobotConfig::validate() const {
   return e;
 }
 
+std::vector<std::string> ReplayConfig::validate() const {
+  std::vector<std::string> e;
+  if (!(give_up_lost_s >= 0 && give_up_lost_s <= 3600)) e.push_back("give_up_lost_s must be in [0, 3600]");
+  if (!(give_up_not_localised_s >= 0 && give_up_not_localised_s <= 3600))
+    e.push_back("give_up_not_localised_s must be in [0, 3600]");
+  return e;
+}
+
 std::vector<std::string> UiConfig::validate() const {
   std::vector<std::string> e;
   if (port < 0 || port > 65535) e.push_back("port must be in 0..65535");
@@ -422,6 +435,7 @@ std::vector<std::string> AppConfig::validate() const {
   append_prefixed(e, "", teach_options().validate());
   append_prefixed(e, "", navigator_options().validate());
   append_prefixed(e, "robot.", robot.validate());
+  append_prefixed(e, "replay.", replay.validate());
   append_prefixed(e, "ui.", ui.validate());
   return e;
 }

@@ -9,6 +9,7 @@
 //   key_images: teach key-image selection (epsilon rule)
 //   navigator:  control laws, velocity schedule, localisation, switching, hold time
 //   robot:      camera request, head lock, safety timeouts, login user
+//   replay:     when a replay that cannot go on gives up
 //   ui:         teach UI port and driving limits
 // Unknown keys and wrong types are errors naming the dotted key and the file; values are then
 // checked by the core's validate() functions before anything moves (STYLE.md 2.5).
@@ -41,6 +42,16 @@ struct RobotConfig {
   std::vector<std::string> validate() const;
 };
 
+struct ReplayConfig {
+  /// Stopped this long (frame time) after having driven, whatever the navigator's reason: the
+  /// replay ends as "lost" with advice. 0 = keep trying until the operator stops it.
+  double give_up_lost_s = 10.0;
+  /// Not localised this long after the first frame: the replay ends as "not_localised" with the
+  /// best candidate key image and advice. 0 = wait until the operator stops it.
+  double give_up_not_localised_s = 10.0;
+  std::vector<std::string> validate() const;
+};
+
 struct UiConfig {
   int port = 8080;               ///< 0 = any free port
   double max_v_m_s = 0.25;       ///< teach driving limits from the keyboard / buttons
@@ -54,6 +65,7 @@ struct AppConfig {
   core::mapping::KeyImageSelectorOptions key_images;
   core::navigator::NavigatorOptions navigator;  ///< its extractor/matcher come from the above
   RobotConfig robot;
+  ReplayConfig replay;
   UiConfig ui;
 
   core::mapping::TeachOptions teach_options() const;

@@ -13,13 +13,13 @@
 
 #include <unistd.h>
 
-#include "core/mapping/drive_odometer.hpp"
-#include "core/mapping/teacher.hpp"
 #include "evaluation/metrics.hpp"
-#include "session/telemetry_json.hpp"
 #include "naoqi_bridge/mock/mock_bridge.hpp"
 #include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/teach_driver.hpp"
+#include "session/robot_connection.hpp"
+#include "session/session_link.hpp"
+#include "session/teach_session.hpp"
+#include "session/telemetry_json.hpp"
 
 namespace pepper::app::evaluation {
 namespace {
@@ -78,7 +78,8 @@ std::vector<std::string> EvaluationOptions::validate() const {
   check(converged_after_m >= 0, "converged_after_m: must be >= 0");
   check(converged_below_m >= 0, "converged_below_m: must be >= 0 (0: distance rule alone)");
   check(end_tolerance_m > 0, "end_tolerance_m: must be > 0");
-  check(lost_timeout_s > 0, "lost_timeout_s: must be > 0");
+  check(give_up_lost_s > 0, "give_up_lost_s: must be > 0");
+  check(give_up_not_localised_s > 0, "give_up_not_localised_s: must be > 0");
   check(divergence_m > 0, "divergence_m: must be > 0");
   check(time_limit_factor >= 1.0, "time_limit_factor: must be >= 1");
   for (const auto& m : disturbance.validate()) e.push_back(m);
@@ -92,60 +93,8 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
     throw std::invalid_argument("EvaluationOptions: " + errors.front());
   }
   const auto t0 = Clock::now();
-  mock::MockRobotOptions ro;
-  ro.lighting = "teach";
-  ro.render.noise_seed = options.seed;
-  mock::MockRobot robot(world, ro);
-  mock::MockBridge bridge(robot);
-  bridge.connect();
-  const core::CameraIntrinsics camera =
-      bridge.start_camera({0, options.width_px, options.height_px, 15});
-  mock::TeachDriver driver(world->scenario);
-  core::mapping::TeachOptions to;
-  to.selector = options.key_images;
-  to.extractor = options.navigator.extractor;
-  // A single-modality evaluation teaches with that modality too (the paper's "lines only" and
-  // "points only" are whole systems): key images are chosen from its counts alone.
-  to.matcher = core::navigator::matcher_for(options.features, options.navigator.matcher);
-  core::mapping::Teacher teacher(camera, to);
-
   TeachResult out;
   out.world_name = world->name;
-  const double dt = 1.0 / ro.frame_rate_hz;
-  // Safety bound: the path at a tenth of the teach speed.
-  const double max_t_s = 60.0 + 10.0 * world->scenario.path_length_m() /
-                                    std::max(world->scenario.teach_speed_m_s, 0.05);
-  double t_s = 0.0;
-  // The map keeps the distance commanded during teach (as the teach session does on a robot).
-  core::mapping::DriveOdometer odometer;
-  double v_in_force_m_s = 0.0;
-  for (; !driver.done() && t_s < max_t_s; t_s += dt) {
-    auto frame = bridge.next_frame(std::chrono::milliseconds(100));
-    const mock::GroundTruth gt = robot.ground_truth();
-    if (robot.collided()) {
-      throw std::runtime_error("teach drive collided with " + gt.collision->what);
-    }
-    if (frame) {
-      const core::mapping::TeachStep st =
-          teacher.add_frame(*frame, odometer.on_frame(frame->t_ns, v_in_force_m_s));
-      if (st.new_key_frame) out.key_frames.push_back(*st.new_key_frame);
-      out.path_m.emplace_back(gt.base.x_m, gt.base.y_m);
-      ++out.frames;
-    }
-    const naoqi_bridge::BaseVelocity cmd = driver.command(gt.base, t_s);
-    bridge.move(cmd);
-    v_in_force_m_s = cmd.v_x_m_s;
-  }
-  bridge.stop();
-  if (!driver.done()) throw std::runtime_error("teach drive did not finish in time");
-
-  std::ostringstream params;
-  params << R"({"evaluation":{"world":")" << world->name << R"(","width_px":)" << options.width_px
-         << R"(,"height_px":)" << options.height_px << "}}";
-  core::memory::VisualMemory map = teacher.finish(params.str());
-  // Frame 0 and the final frame are key images too (the selector reports the ones between).
-  out.key_frames.insert(out.key_frames.begin(), 0);
-  if (map.key_images.size() == out.key_frames.size() + 1) out.key_frames.push_back(out.frames - 1);
   out.map_dir = options.map_dir.empty()
                     ? std::filesystem::temp_directory_path() /
                           ("pepper_eval_map_" + world->name + "_" +
@@ -154,8 +103,43 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
                            single_modality_tag(options.features, "_") + "_" +
                            std::to_string(::getpid()))
                     : options.map_dir;
-  core::memory::save_map(map, out.map_dir);
+
+  // The teach session that `teach --scripted` runs, on a simulated robot of this evaluation.
+  mock::MockRobotOptions ro;
+  ro.lighting = "teach";
+  ro.render.noise_seed = options.seed;
+  RobotConnection robot = open_mock_robot(world, ro, {});
+  TeachSessionOptions so;
+  so.map_dir = out.map_dir;
+  so.camera = camera_request(options);
+  so.head = options.head;
+  so.teach.selector = options.key_images;
+  so.teach.extractor = options.navigator.extractor;
+  // A single-modality evaluation teaches with that modality too (the paper's "lines only" and
+  // "points only" are whole systems): key images are chosen from its counts alone.
+  so.teach.matcher = core::navigator::matcher_for(options.features, options.navigator.matcher);
+  so.scripted = true;
+  // Safety bound: the path at a tenth of the teach speed.
+  const double max_t_s = 60.0 + 10.0 * world->scenario.path_length_m() /
+                                    std::max(world->scenario.teach_speed_m_s, 0.05);
+  so.max_frames = static_cast<int64_t>(max_t_s * ro.frame_rate_hz);
+  std::ostringstream params;
+  params << R"({"evaluation":{"world":")" << world->name << R"(","width_px":)" << options.width_px
+         << R"(,"height_px":)" << options.height_px << "}}";
+  so.config_json = params.str();
+  SessionLink link(nullptr, nullptr);
+  const app::TeachResult taught = run_teach_session(robot, so, link);
+  if (!taught.ok()) {
+    throw std::runtime_error("teach " + taught.outcome + ": " +
+                             (taught.error.empty() ? "map not saved" : taught.error));
+  }
+  if (taught.frames_recorded >= so.max_frames) {
+    throw std::runtime_error("teach drive did not finish in time");
+  }
   out.map = core::memory::load_map(out.map_dir);
+  out.path_m = taught.path_m;
+  out.key_m = taught.key_m;
+  out.frames = static_cast<int>(taught.frames_recorded);
   out.length_m = Polyline(out.path_m).length_m();
   out.wall_s = seconds_since(t0);
   if (progress) {
@@ -171,6 +155,7 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
 }
 
 mock::Pose2D replay_start_pose(const mock::World& world, int k, const EvaluationOptions& options) {
+  if (options.seed == 0) return world.scenario.start_pose();
   mock::Scenario sc = world.scenario;
   sc.replay_starts = {world.scenario.start_pose()};
   sc.perturb_lateral_m = options.perturb_lateral_m;
@@ -185,55 +170,177 @@ mock::Pose2D replay_start_pose(const mock::World& world, int k, const Evaluation
   return world.scenario.start_pose();
 }
 
+MockReplaySetup mock_replay_setup(const mock::World& start_world, int k,
+                                  const std::string& lighting, const EvaluationOptions& options) {
+  MockReplaySetup setup;
+  setup.start = replay_start_pose(start_world, k, options);
+  setup.robot.lighting = lighting;
+  setup.robot.render.noise_seed = options.seed * 1000 + static_cast<uint64_t>(k) + 1;
+  if (options.disturbances.count(Disturbance::kLatency)) {
+    setup.robot.kinematics.latency_s = options.disturbance.latency_s;
+  }
+  if (options.disturbances.count(Disturbance::kDrops)) {
+    setup.bridge.wifi.drop_probability = options.disturbance.drop_probability;
+    setup.bridge.wifi.seed = options.seed * 7 + static_cast<uint64_t>(k);
+  }
+  return setup;
+}
+
+naoqi_bridge::CameraRequest camera_request(const EvaluationOptions& options) {
+  naoqi_bridge::CameraRequest request;
+  request.width_px = options.width_px;
+  request.height_px = options.height_px;
+  request.fps = 15;  // the mock's lockstep rate (MockRobotOptions::frame_rate_hz)
+  return request;
+}
+
+namespace {
+
+/// The evaluation's view of a replay: ground truth per loop iteration (also for dropped frames,
+/// when the base keeps the command in force), the trace, and the ends that only ground truth can
+/// see (left the path, drove past its end, out of time).
+class GroundTruthMonitor final : public ReplayMonitor {
+ public:
+  GroundTruthMonitor(mock::MockRobot& robot, const TeachResult& teach,
+                     const EvaluationOptions& options, RunResult& run, std::ofstream* trace)
+      : robot_(robot),
+        options_(options),
+        run_(run),
+        trace_(trace),
+        taught_(teach.path_m),
+        // The first projection searches the first half of the tour (starts are near its
+        // beginning), so that the end of a loop tour is not taken for its start.
+        tracker_(taught_, 0.5 * taught_.length_m()),
+        dt_s_(1.0 / robot.options().frame_rate_hz),
+        time_limit_s_(options.time_limit_factor * teach.length_m / kSlowSpeedMS + 20.0) {
+    const mock::GroundTruth gt = robot_.ground_truth();
+    last_pos_ = {gt.base.x_m, gt.base.y_m};
+    run_.start_lateral_m = tracker_.update(last_pos_).lateral_m;
+  }
+
+  std::optional<ReplayEnd> after_iteration(const nav::StepResult* step,
+                                           const ReplaySample* sample) override {
+    RunSample smp;
+    smp.frame_received = step != nullptr;
+    smp.step_ms = kNaN;
+    if (step) {
+      const nav::Command& c = step->command;
+      smp.step_ms = sample->step_ms;
+      if (!c.stop) {
+        smp.v_m_s = c.v_m_s;
+        smp.omega_rad_s = c.omega_rad_s;
+        localized_once_ = true;
+      }
+      smp.n_lines = step->telemetry.n_lines_next;
+      smp.n_points = step->telemetry.n_points_next;
+      smp.key_next = step->telemetry.in;
+      if (c.stop && c.reason != nav::StopReason::kTourComplete && localized_once_) {
+        ++run_.lost_frames;
+      }
+    } else if (!run_.samples.empty()) {
+      // Dropped frame: the base keeps the command in force.
+      smp.v_m_s = run_.samples.back().v_m_s;
+      smp.omega_rad_s = run_.samples.back().omega_rad_s;
+    }
+    const PathProjection pr = record(smp, step);
+    if (std::abs(pr.lateral_m) > options_.divergence_m) {
+      return ReplayEnd{"diverged", "|lateral| " + fmt("%.2f", std::abs(pr.lateral_m)) + " m"};
+    }
+    if (pr.s_m > taught_.length_m() + options_.divergence_m) {
+      return ReplayEnd{"overshot",
+                       "drove " + fmt("%.2f", pr.s_m - taught_.length_m()) + " m past the taught end"};
+    }
+    if (t_s_ > time_limit_s_) return ReplayEnd{"timeout", "after " + fmt("%.0f", t_s_) + " s"};
+    t_s_ += dt_s_;
+    return std::nullopt;
+  }
+
+  /// After the session ended on the end of the tour: the base decelerates at its limits; let it
+  /// come to rest (at most 3 s) before the final position is measured.
+  void settle() {
+    for (int i = 0; i < 45; ++i) {
+      const mock::GroundTruth gt = robot_.ground_truth();
+      if (std::abs(gt.velocity.v_x_m_s) < 1e-3 && std::abs(gt.velocity.omega_rad_s) < 1e-3) return;
+      robot_.advance_s(dt_s_);
+      t_s_ += dt_s_;
+      RunSample smp;
+      smp.frame_received = false;
+      smp.step_ms = kNaN;
+      record(smp, nullptr);
+    }
+  }
+
+  double sim_s() const { return t_s_; }
+  Eigen::Vector2d last_position() const { return last_pos_; }
+  bool localized_once() const { return localized_once_; }
+
+ private:
+  PathProjection record(RunSample& smp, const nav::StepResult* step) {
+    const mock::GroundTruth gt = robot_.ground_truth();
+    const Eigen::Vector2d pos(gt.base.x_m, gt.base.y_m);
+    run_.travelled_m += (pos - last_pos_).norm();
+    last_pos_ = pos;
+    const PathProjection pr = tracker_.update(pos);
+    smp.t_s = t_s_;
+    smp.x_m = pos.x();
+    smp.y_m = pos.y();
+    smp.yaw_rad = gt.base.yaw_rad;
+    smp.travelled_m = run_.travelled_m;
+    smp.s_m = pr.s_m;
+    smp.lateral_m = pr.lateral_m;
+    run_.samples.push_back(smp);
+    if (trace_ && *trace_) {
+      nlohmann::json line = {{"t_s", t_s_},
+                             {"gt", {{"x_m", pos.x()}, {"y_m", pos.y()}, {"yaw_rad", gt.base.yaw_rad},
+                                     {"s_m", pr.s_m}, {"lateral_m", pr.lateral_m}}}};
+      if (step) {
+        line["command"] = command_to_json(step->command);
+        line["telemetry"] = telemetry_to_json(step->telemetry);
+      }
+      *trace_ << line.dump() << '\n';
+    }
+    return pr;
+  }
+
+  mock::MockRobot& robot_;
+  const EvaluationOptions& options_;
+  RunResult& run_;
+  std::ofstream* trace_;
+  Polyline taught_;
+  PathTracker tracker_;
+  double dt_s_;
+  double time_limit_s_;
+  double t_s_ = 0.0;
+  Eigen::Vector2d last_pos_;
+  bool localized_once_ = false;
+};
+
+}  // namespace
+
+ReplaySessionOptions replay_session_options(const EvaluationOptions& options) {
+  ReplaySessionOptions so;
+  so.camera = camera_request(options);
+  so.head = options.head;
+  so.navigator = options.navigator;
+  so.navigator.features = options.features;
+  so.give_up_lost_s = options.give_up_lost_s;
+  so.give_up_not_localised_s = options.give_up_not_localised_s;
+  return so;
+}
+
 RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock::World>& replay_world,
                      const std::string& lighting, const mock::Pose2D& start, int k,
                      const EvaluationOptions& options) {
   const auto wall0 = Clock::now();
-  mock::MockRobotOptions ro;
-  ro.lighting = lighting;
-  ro.render.noise_seed = options.seed * 1000 + static_cast<uint64_t>(k) + 1;
-  if (options.disturbances.count(Disturbance::kLatency)) {
-    ro.kinematics.latency_s = options.disturbance.latency_s;
-  }
-  mock::MockRobot robot(replay_world, ro);
-  mock::MockBridgeOptions bo;
-  if (options.disturbances.count(Disturbance::kDrops)) {
-    bo.wifi.drop_probability = options.disturbance.drop_probability;
-    bo.wifi.seed = options.seed * 7 + static_cast<uint64_t>(k);
-  }
-  mock::MockBridge bridge(robot, bo);
-  bridge.connect();
-  bridge.start_camera({0, options.width_px, options.height_px, 15});
-  robot.place(start);
-
-  nav::NavigatorOptions no = options.navigator;
-  no.features = options.features;
-  no.controller = options.controller;
-  nav::Navigator navigator(teach.map, no);
-
-  const Polyline taught(teach.path_m);
-  // The first projection searches the first half of the tour (starts are near its beginning),
-  // so that the end of a loop tour is not taken for its start.
-  PathTracker tracker(taught, 0.5 * taught.length_m());
-  const Eigen::Vector2d end_m = teach.path_m.back();
+  MockReplaySetup setup = mock_replay_setup(*replay_world, k, lighting, options);
+  RobotConnection robot = open_mock_robot(replay_world, setup.robot, setup.bridge);
+  robot.mock->place(start);
 
   RunResult r;
   r.index = k;
   r.start_x_m = start.x_m;
   r.start_y_m = start.y_m;
   r.start_yaw_rad = start.yaw_rad;
-  const double dt = 1.0 / ro.frame_rate_hz;
-  const double time_limit_s =
-      options.time_limit_factor * teach.length_m / kSlowSpeedMS + 20.0;
-
-  mock::GroundTruth gt = robot.ground_truth();
-  Eigen::Vector2d last_pos(gt.base.x_m, gt.base.y_m);
-  r.start_lateral_m = tracker.update(last_pos).lateral_m;
-  bool localized_once = false;
-  double stopped_since_s = -1.0;  // sim time since which the robot has had no command
-  double t_s = 0.0;
-  int stop_frames_after_complete = 0;
-  std::vector<double> step_ms;
   std::ofstream trace;
   if (!options.trace_dir.empty()) {
     std::filesystem::create_directories(options.trace_dir);
@@ -247,119 +354,36 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
     if (!trace) throw std::runtime_error(file.string() + ": cannot open for writing");
     // First line: where each key image was taught (its ground-truth base position).
     nlohmann::json keys = nlohmann::json::array();
-    for (const int64_t f : teach.key_frames) {
-      const auto& p = teach.path_m.at(static_cast<std::size_t>(f));
-      keys.push_back({{"frame", f}, {"x_m", p.x()}, {"y_m", p.y()}});
-    }
+    for (const auto& p : teach.key_m) keys.push_back({{"x_m", p.x()}, {"y_m", p.y()}});
     trace << nlohmann::json{{"taught_key_images", keys}}.dump() << '\n';
   }
-  for (;; t_s += dt) {
-    auto frame = bridge.next_frame(std::chrono::milliseconds(100));
-    RunSample smp;
-    smp.t_s = t_s;
-    smp.frame_received = frame.has_value();
-    smp.step_ms = kNaN;
-    bool stopped = false;
-    std::optional<nav::StepResult> step;
-    if (frame) {
-      const auto s0 = Clock::now();
-      step = navigator.step(*frame);
-      const nav::StepResult& res = *step;
-      smp.step_ms = 1e3 * seconds_since(s0);
-      step_ms.push_back(smp.step_ms);
-      const nav::Command& c = res.command;
-      if (c.stop) {
-        bridge.stop();
-        stopped = true;
-      } else {
-        bridge.move({c.v_m_s, 0.0, c.omega_rad_s});
-        smp.v_m_s = c.v_m_s;
-        smp.omega_rad_s = c.omega_rad_s;
-        localized_once = true;
-      }
-      smp.n_lines = res.telemetry.n_lines_next;
-      smp.n_points = res.telemetry.n_points_next;
-      smp.key_next = res.telemetry.in;
-      if (c.stop && c.reason == nav::StopReason::kTourComplete) r.tour_complete = true;
-      if (c.stop && c.reason != nav::StopReason::kTourComplete && localized_once) ++r.lost_frames;
-    } else if (!r.samples.empty()) {
-      // Dropped frame: the base keeps the command in force.
-      smp.v_m_s = r.samples.back().v_m_s;
-      smp.omega_rad_s = r.samples.back().omega_rad_s;
-      stopped = smp.v_m_s == 0.0 && smp.omega_rad_s == 0.0;
-    }
-    gt = robot.ground_truth();
-    const Eigen::Vector2d pos(gt.base.x_m, gt.base.y_m);
-    r.travelled_m += (pos - last_pos).norm();
-    last_pos = pos;
-    const PathProjection pr = tracker.update(pos);
-    smp.x_m = pos.x();
-    smp.y_m = pos.y();
-    smp.yaw_rad = gt.base.yaw_rad;
-    smp.travelled_m = r.travelled_m;
-    smp.s_m = pr.s_m;
-    smp.lateral_m = pr.lateral_m;
-    r.samples.push_back(smp);
-    if (trace) {
-      nlohmann::json line = {{"t_s", t_s},
-                             {"gt", {{"x_m", pos.x()}, {"y_m", pos.y()}, {"yaw_rad", gt.base.yaw_rad},
-                                     {"s_m", pr.s_m}, {"lateral_m", pr.lateral_m}}}};
-      if (step) {
-        line["command"] = command_to_json(step->command);
-        line["telemetry"] = telemetry_to_json(step->telemetry);
-      }
-      trace << line.dump() << '\n';
-    }
 
-    if (robot.collided()) {
-      r.outcome = "collision";
-      r.detail = gt.collision ? gt.collision->what : "";
-      break;
-    }
-    if (step && step->telemetry.state == nav::NavState::kOverdue) {
-      r.outcome = "overdue";
-      r.detail = "navigator stopped: no switch after key image " +
-                 std::to_string(step->telemetry.ip) + " for far longer than teaching took";
-      break;
-    }
-    if (r.tour_complete) {
-      // Let the base come to rest (it decelerates at its limits), then measure.
-      if (std::abs(gt.velocity.v_x_m_s) < 1e-3 && std::abs(gt.velocity.omega_rad_s) < 1e-3) break;
-      if (++stop_frames_after_complete > 45) break;
-      continue;
-    }
-    if (stopped && !r.tour_complete) {
-      if (stopped_since_s < 0) stopped_since_s = t_s;
-      if (t_s - stopped_since_s > options.lost_timeout_s) {
-        r.outcome = "lost";
-        r.detail = localized_once ? "no command for " + fmt("%.1f", options.lost_timeout_s) + " s"
-                                  : "never localised";
-        break;
-      }
-    } else {
-      stopped_since_s = -1.0;
-    }
-    if (std::abs(pr.lateral_m) > options.divergence_m) {
-      r.outcome = "diverged";
-      r.detail = "|lateral| " + fmt("%.2f", std::abs(pr.lateral_m)) + " m";
-      break;
-    }
-    if (pr.s_m > taught.length_m() + options.divergence_m) {
-      r.outcome = "overshot";
-      r.detail = "drove " + fmt("%.2f", pr.s_m - taught.length_m()) + " m past the taught end";
-      break;
-    }
-    if (t_s > time_limit_s) {
-      r.outcome = "timeout";
-      r.detail = "after " + fmt("%.0f", t_s) + " s";
-      break;
-    }
+  GroundTruthMonitor monitor(*robot.mock, teach, options, r, trace.is_open() ? &trace : nullptr);
+  ReplaySessionOptions so = replay_session_options(options);
+  so.monitor = &monitor;
+  SessionLink link(nullptr, nullptr);
+  // The replay loop users run (`replay`, `demo`): its decisions are what is scored here.
+  const ReplayResult replayed = run_replay_session(robot, teach.map, so, link);
+  r.tour_complete = replayed.tour_complete;
+  if (replayed.tour_complete) {
+    monitor.settle();
+  } else if (replayed.outcome == "not_localised" || replayed.outcome == "lost") {
+    r.outcome = replayed.outcome;
+    r.detail = replayed.detail;
+  } else {
+    r.outcome = replayed.outcome;
+    r.detail = replayed.error.empty() ? replayed.detail : replayed.error;
   }
-  bridge.stop();
+  if (const auto gt = robot.mock->ground_truth(); gt.collision && r.outcome.empty()) {
+    r.outcome = "collision";
+    r.detail = gt.collision->what;
+  }
   r.frames = static_cast<int>(r.samples.size());
-  r.frames_dropped = static_cast<int>(bridge.frames_dropped());
-  r.sim_s = t_s;
-  r.final_error_m = (last_pos - end_m).norm();
+  r.frames_dropped =
+      static_cast<int>(static_cast<mock::MockBridge&>(*robot.bridge).frames_dropped());
+  r.sim_s = monitor.sim_s();
+  const Eigen::Vector2d end_m = teach.path_m.back();
+  r.final_error_m = (monitor.last_position() - end_m).norm();
   if (r.tour_complete && r.outcome.empty()) {
     if (r.final_error_m <= options.end_tolerance_m) {
       r.outcome = "complete";
@@ -370,13 +394,14 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
     }
   }
 
-  std::vector<double> travelled, lateral, omega, t;
+  std::vector<double> travelled, lateral, omega, t, step_ms;
   for (const RunSample& s : r.samples) {
     travelled.push_back(s.travelled_m);
     lateral.push_back(s.lateral_m);
     if (s.frame_received) {
       omega.push_back(s.omega_rad_s);
       t.push_back(s.t_s);
+      step_ms.push_back(s.step_ms);
     }
   }
   const DeviationStats ds =
@@ -442,7 +467,7 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const mock::
   Evaluation ev;
   ev.world_name = world->name;
   ev.features = feature_label(options.features);
-  ev.controller = core::navigator::to_string(options.controller);
+  ev.controller = core::navigator::to_string(options.navigator.controller);
   ev.size = std::to_string(options.width_px) + "x" + std::to_string(options.height_px);
   for (Disturbance d : options.disturbances) ev.disturbances.push_back(to_string(d));
   ev.key_images = static_cast<int>(teach.map.key_images.size());

@@ -1,9 +1,12 @@
 #pragma once
 // Closed-loop evaluation of teach and replay on the mock robot (docs/evaluation.md; issue 4):
-// teach a world's tour (TeachDriver on ground truth, core::mapping::Teacher picks key images,
-// the map is saved and loaded back), then replay it with core::navigator::Navigator from N
-// perturbed starts, possibly with disturbances (disturbance.hpp), and measure how well the
-// taught path is followed.
+// teach a world's tour with the product's teach session (run_teach_session, scripted drive on
+// ground truth; the map is saved and loaded back), then replay it with the product's replay
+// session (run_replay_session, the loop `replay` and `demo` run) from N perturbed starts,
+// possibly with disturbances (disturbance.hpp), and measure how well the taught path is followed.
+// The evaluation adds only the simulated robot's set-up, ground truth and metrics (a
+// ReplayMonitor); whatever the replay decides (end of tour, lost, not localised, overdue) is what
+// is scored.
 //
 // Definitions (the numbers are options, defaults documented below):
 //  - taught path: the ground-truth base positions of the teach drive, one per frame;
@@ -11,10 +14,11 @@
 //    (metrics.hpp, > 0 left), followed along the path by a PathTracker;
 //  - converged: samples after `converged_after_m` of travelled distance and after |lateral|
 //    first fell below `converged_below_m`;
-//  - success: the navigator reported kTourComplete, the robot stopped within
-//    `end_tolerance_m` of the taught end position, and it never collided, never stayed lost
-//    (no command) longer than `lost_timeout_s`, never left the path by more than
-//    `divergence_m`, and finished before the time limit.
+//  - success: the replay ended with the end of the tour, the robot stopped within
+//    `end_tolerance_m` of the taught end position, and it never collided, never stayed stopped
+//    after driving longer than `give_up_lost_s` and was localised within
+//    `give_up_not_localised_s` (the replay session's own give-up rules, configuration `replay.*`),
+//    never left the path by more than `divergence_m`, and finished before the time limit.
 // Timings: the navigator step is timed with std::chrono::steady_clock (wall clock, evaluation
 // only); everything else is simulated time. Deterministic in (world, options) except timings.
 // Errors: invalid options throw std::invalid_argument naming the field; world, map and
@@ -35,7 +39,11 @@
 #include "core/mapping/key_image_selector.hpp"
 #include "core/navigator/navigator.hpp"
 #include "evaluation/disturbance.hpp"
+#include "naoqi_bridge/mock/mock_bridge.hpp"
+#include "naoqi_bridge/mock/mock_robot.hpp"
 #include "naoqi_bridge/mock/world.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+#include "session/replay_session.hpp"
 
 namespace pepper::app::evaluation {
 
@@ -44,12 +52,11 @@ struct EvaluationOptions {
   /// Replay only these of the `starts` runs (1-based, same starts as in the full evaluation);
   /// empty: all. For re-running one failed start with --trace.
   std::vector<int> only_runs;
-  uint64_t seed = 1;                ///< start perturbations, disturbances, noise
+  uint64_t seed = 1;                ///< start perturbations (0: none), disturbances, noise
   int width_px = 640;               ///< camera size (VGA; 320x240 for quick runs)
   int height_px = 480;
   /// Lines, points or both: teach (key-image selection) and replay match only these.
   core::control::FeatureMode features = core::control::FeatureMode::kLinesAndPoints;
-  core::navigator::ControllerKind controller = core::navigator::ControllerKind::kIbvs;
   /// Start perturbations (uniform, +-): replaces the world's own ranges. The start of run k is
   /// world.scenario.replay_start(k, seed') with these ranges; a start whose 0.3 m footprint
   /// touches an obstacle is redrawn (next seed').
@@ -64,12 +71,17 @@ struct EvaluationOptions {
   double converged_after_m = 1.5;
   double converged_below_m = 0.05;
   double end_tolerance_m = 0.3;     ///< success: final base position within this of the end
-  double lost_timeout_s = 5.0;      ///< stopped without a command this long: lost (failure)
+  /// The replay session's give-up times (configuration replay.give_up_lost_s and
+  /// replay.give_up_not_localised_s; `evaluate` takes them from the configuration). > 0.
+  double give_up_lost_s = 10.0;
+  double give_up_not_localised_s = 10.0;
   double divergence_m = 1.0;        ///< |lateral| beyond this ends the run (failure)
   /// Time limit per run: time_limit_factor x (taught path length / 0.08 m/s) + 20 s.
   double time_limit_factor = 1.5;
   std::filesystem::path map_dir;    ///< where the taught map is saved (empty: a temp folder)
-  core::navigator::NavigatorOptions navigator;  ///< features/controller fields are overridden
+  /// The navigator (controller included); its `features` field is overridden by `features`.
+  core::navigator::NavigatorOptions navigator;
+  naoqi_bridge::HeadLockRequest head;  ///< teach and replay lock the head here
   core::mapping::KeyImageSelectorOptions key_images;  ///< teach: key-image selection rule
   /// When set, each run writes <trace_dir>/<world>_<features>_<disturbances>_run<k>.jsonl
   /// (disturbances: "none", or e.g. "light+person"): per frame the ground
@@ -85,7 +97,7 @@ struct TeachResult {
   core::memory::VisualMemory map;            ///< as loaded back from map_dir
   std::filesystem::path map_dir;
   std::vector<Eigen::Vector2d> path_m;       ///< ground-truth base positions, one per frame
-  std::vector<int64_t> key_frames;           ///< teach frame numbers of all key images
+  std::vector<Eigen::Vector2d> key_m;        ///< ground-truth base positions of the key images
   double length_m = 0.0;                     ///< length of path_m
   int frames = 0;
   double wall_s = 0.0;                       ///< wall-clock time of the teach
@@ -170,6 +182,23 @@ TeachResult teach_tour(const std::shared_ptr<const naoqi_bridge::mock::World>& w
 /// Start pose of run k (perturbed, collision-free; see EvaluationOptions).
 naoqi_bridge::mock::Pose2D replay_start_pose(const naoqi_bridge::mock::World& world, int k,
                                              const EvaluationOptions& options);
+
+/// The simulated robot of replay run k: its start pose and the options that build it (lighting,
+/// camera noise seed, and the latency and frame-drop disturbances). `evaluate` and `replay
+/// --robot mock:W --mock-start K --seed S` both use it, so they replay the same run.
+struct MockReplaySetup {
+  naoqi_bridge::mock::Pose2D start;
+  naoqi_bridge::mock::MockRobotOptions robot;
+  naoqi_bridge::mock::MockBridgeOptions bridge;
+};
+MockReplaySetup mock_replay_setup(const naoqi_bridge::mock::World& start_world, int k,
+                                  const std::string& lighting, const EvaluationOptions& options);
+
+/// The camera request of teach and replay (the options' size, the mock's 15 fps).
+naoqi_bridge::CameraRequest camera_request(const EvaluationOptions& options);
+
+/// The replay session's options for an evaluation run (no monitor set).
+ReplaySessionOptions replay_session_options(const EvaluationOptions& options);
 
 /// One replay from `start` in `replay_world` (possibly disturbed), lighting `lighting`.
 RunResult replay_run(const TeachResult& teach,

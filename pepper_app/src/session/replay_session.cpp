@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <optional>
 #include <stdexcept>
@@ -24,11 +25,18 @@ std::vector<std::string> ReplaySessionOptions::validate() const {
   if (max_frames < 0) e.push_back("max_frames must be >= 0");
   if (!(pace_hz >= 0)) e.push_back("pace_hz must be >= 0");
   if (!(give_up_lost_s >= 0)) e.push_back("give_up_lost_s must be >= 0");
+  if (!(give_up_not_localised_s >= 0)) e.push_back("give_up_not_localised_s must be >= 0");
   for (const auto& m : navigator.validate()) e.push_back("navigator: " + m);
   return e;
 }
 
 namespace {
+
+std::string format_s(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", s);
+  return buf;
+}
 
 bool close_rel(double a, double b, double tol) { return std::abs(a - b) <= tol * std::abs(b); }
 
@@ -83,6 +91,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
   auto end_with = [&](const std::string& outcome, const std::string& reason_text) {
     stop_base(outcome);
     result.outcome = outcome;
+    result.detail = reason_text;
     link.publish_state({{"stop_reason", reason_text}});
   };
 
@@ -136,6 +145,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     int64_t t0_ns = -1;
     int last_in = -2;
     int64_t last_moving_t_ns = -1;
+    int best_candidate = -1, best_candidate_count = 0;  // last localisation attempt's best
     nlohmann::json replayed = nlohmann::json::array();
     if (!options.taught_path_m.empty()) {  // constant: sent once, not with every "trajectory"
       nlohmann::json taught = nlohmann::json::array(), taught_keys = nlohmann::json::array();
@@ -171,6 +181,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                    "no camera frame for " + std::to_string(options.frame_timeout_ms) + " ms");
           break;
         }
+        if (options.monitor) {
+          if (auto end = options.monitor->after_iteration(nullptr, nullptr)) {
+            end_with(end->outcome, end->detail);
+            break;
+          }
+        }
         continue;
       }
       last_frame_at = Clock::now();
@@ -181,7 +197,10 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         link.publish_frame(*frame, nlohmann::json::object());
         continue;
       }
+      const auto step_t0 = Clock::now();
       const nav::StepResult step = step_override ? step_override(*frame) : navigator->step(*frame);
+      const double step_ms =
+          std::chrono::duration<double, std::milli>(Clock::now() - step_t0).count();
       const nav::Command& c = step.command;
       const nav::Telemetry& t = step.telemetry;
       const bool finite = std::isfinite(c.v_m_s) && std::isfinite(c.omega_rad_s);
@@ -193,12 +212,20 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       }
       result.max_key_reached = std::max(result.max_key_reached, t.in);
       if (!c.stop) last_moving_t_ns = frame->t_ns;
-      const bool gave_up = options.give_up_lost_s > 0 && last_moving_t_ns >= 0 && c.stop &&
-                           c.reason == nav::StopReason::kFeaturesLost &&
+      if (t.localization_ran) {
+        best_candidate = t.localization_best;
+        best_candidate_count = t.localization_best_count;
+      }
+      const bool stopped_short = c.stop && c.reason != nav::StopReason::kTourComplete;
+      const bool gave_up = options.give_up_lost_s > 0 && last_moving_t_ns >= 0 && stopped_short &&
                            (frame->t_ns - last_moving_t_ns) * 1e-9 > options.give_up_lost_s;
+      const bool never_localised = options.give_up_not_localised_s > 0 && last_moving_t_ns < 0 &&
+                                   stopped_short &&
+                                   (frame->t_ns - t0_ns) * 1e-9 > options.give_up_not_localised_s;
 
       ReplaySample s;
       s.t_s = (frame->t_ns - t0_ns) * 1e-9;
+      s.step_ms = step_ms;
       s.v_m_s = c.stop ? 0.0 : c.v_m_s;
       s.omega_rad_s = c.stop ? 0.0 : c.omega_rad_s;
       s.stop = c.stop;
@@ -222,13 +249,15 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         }
         if (robot.mock->collided()) {
           result.samples.push_back(s);
-          end_with("error", "collision with " + (gt.collision ? gt.collision->what : "?"));
-          result.error = "collision";
+          if (options.monitor) options.monitor->after_iteration(&step, &result.samples.back());
+          end_with("collision", "collision with " + (gt.collision ? gt.collision->what : "?"));
           break;
         }
       }
       result.samples.push_back(s);
       if (telemetry.is_open()) telemetry << line.dump() << "\n";
+      std::optional<ReplayEnd> monitor_end;
+      if (options.monitor) monitor_end = options.monitor->after_iteration(&step, &s);
 
       if (link.has_ui()) {
         nlohmann::json overlay = overlay_to_json(
@@ -272,9 +301,24 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                                 "robot is (end of tour not visible?)");
         break;
       }
+      if (monitor_end) {
+        end_with(monitor_end->outcome, monitor_end->detail);
+        break;
+      }
       if (gave_up) {
-        end_with("lost", "features lost for more than " + std::to_string(options.give_up_lost_s) +
-                             " s: giving up");
+        end_with("lost", "stopped (" + std::string(nav::to_string(c.reason)) + ") for more than " +
+                             format_s(options.give_up_lost_s) +
+                             " s after driving: giving up. Check the lights and the view; "
+                             "place the robot back on the taught path and replay again");
+        break;
+      }
+      if (never_localised) {
+        end_with("not_localised",
+                 "not localised after " + format_s(options.give_up_not_localised_s) +
+                     " s (best candidate: key image " + std::to_string(best_candidate) + " with " +
+                     std::to_string(best_candidate_count) + " verified matches): place the "
+                     "robot on the taught path near a key image facing the taught direction, "
+                     "check the lights, and check that the map belongs to this place");
         break;
       }
       if (options.max_frames > 0 && result.frames >= options.max_frames) {

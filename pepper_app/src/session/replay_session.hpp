@@ -7,8 +7,12 @@
 // Stops whenever unsure: the navigator says stop (not localised, features lost: it keeps
 // stepping; tour complete: the session ends), no frame for frame_timeout_ms (ends, "frame_timeout"),
 // an exception from the core or the bridge ("error"), Ctrl-C ("interrupted"), the UI's STOP
-// ("ui_stop"), a lost connection ("connection_lost"), the frame cap ("max_frames"). Every way out
-// sends bridge.stop() first.
+// ("ui_stop"), a lost connection ("connection_lost"), the frame cap ("max_frames"), stopped too long
+// after driving ("lost", give_up_lost_s), never localised ("not_localised",
+// give_up_not_localised_s), a collision of the simulated robot ("collision"), or a ReplayMonitor's
+// end. Every way out sends bridge.stop() first.
+// This loop is the only replay loop of the product: `replay`, `demo` and `evaluate` run it (the
+// evaluation adds its ground truth and metrics through a ReplayMonitor).
 // On the mock robot the ground-truth base positions are collected (top view, evaluation). The UI's
 // live image carries the navigator's matches with IN (Telemetry::overlay).
 // Threads: none of its own. Errors end in ReplayResult (never thrown) after the stop.
@@ -16,6 +20,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +34,27 @@
 
 namespace pepper::app {
 
+struct ReplaySample;
+
+/// Why a monitor ends the replay (outcome: a short name, detail: one sentence).
+struct ReplayEnd {
+  std::string outcome;
+  std::string detail;
+};
+
+/// Sees every iteration of the replay loop and may end it. The evaluation uses one to record
+/// ground truth and to end runs that left the taught path (diverged, overshot, time limit); the
+/// loop itself, with every decision and stop path, is the one users run.
+class ReplayMonitor {
+ public:
+  virtual ~ReplayMonitor() = default;
+  /// Called after each frame request, once the command (if any) has been sent. `step` and
+  /// `sample` are null when no frame arrived (dropped or late). Returning an end stops the base
+  /// and ends the session with that outcome.
+  virtual std::optional<ReplayEnd> after_iteration(const core::navigator::StepResult* step,
+                                                   const ReplaySample* sample) = 0;
+};
+
 struct ReplaySessionOptions {
   naoqi_bridge::CameraRequest camera;
   naoqi_bridge::HeadLockRequest head;
@@ -39,9 +65,15 @@ struct ReplaySessionOptions {
   std::filesystem::path record_dir;  ///< non-empty: record the frames here
   double pace_hz = 0.0;              ///< > 0: at most this many frames per second
   bool wait_for_start = false;       ///< wait for the UI's start_replay before moving
-  /// > 0: end ("lost") after the navigator stopped for lost features this long (frame time)
-  /// once it had been driving; 0 = keep trying to relocalise until stopped by the operator.
+  /// > 0: end ("lost") after the navigator has commanded a stop this long (frame time) once it
+  /// had been driving, whatever the stop reason (other than the end of the tour); 0 = keep
+  /// trying to relocalise until stopped by the operator.
   double give_up_lost_s = 0.0;
+  /// > 0: end ("not_localised") when the first localisation has not succeeded after this long
+  /// (frame time since the first frame); 0 = wait until stopped by the operator.
+  double give_up_not_localised_s = 0.0;
+  /// Not owned; may be null. See ReplayMonitor.
+  ReplayMonitor* monitor = nullptr;
   std::string config_json = "{}";
   /// Mock only, shown in the UI's top view: the taught ground-truth path and key-image positions
   /// (world frame), sent once as the state key "taught_path".
@@ -52,7 +84,8 @@ struct ReplaySessionOptions {
 
 /// One replayed frame (for plots and the report).
 struct ReplaySample {
-  double t_s = 0.0;
+  double t_s = 0.0;               ///< frame time since the first frame
+  double step_ms = 0.0;           ///< wall-clock time of the navigator step
   double v_m_s = 0.0, omega_rad_s = 0.0;
   bool stop = true;
   int in = -1;
@@ -63,7 +96,9 @@ struct ReplaySample {
 
 struct ReplayResult {
   std::string outcome;  ///< tour_complete, interrupted, ui_stop, frame_timeout, connection_lost,
-                        ///< error, max_frames, lost
+                        ///< error, max_frames, lost, not_localised, overdue, collision (mock),
+                        ///< or a ReplayMonitor's outcome
+  std::string detail;   ///< one sentence on why it ended
   std::string error;
   int64_t frames = 0;
   int key_image_count = 0;

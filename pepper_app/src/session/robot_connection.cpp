@@ -41,19 +41,33 @@ RobotUrl parse_robot_url(const std::string& text) {
   return out;
 }
 
-RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options) {
+RobotConnection open_mock_robot(std::shared_ptr<const mock::World> world,
+                                const mock::MockRobotOptions& robot_options,
+                                mock::MockBridgeOptions bridge_options) {
   RobotConnection c;
-  c.url = parse_robot_url(url);
-  if (c.url.kind == RobotUrl::Kind::kMock) {
-    auto world = std::make_shared<const mock::World>(mock::load_world(c.url.world_file));
+  c.url.kind = RobotUrl::Kind::kMock;
+  c.url.world_file = world->source;
+  c.url.url = "mock:" + world->source.string();
+  if (bridge_options.description.empty()) bridge_options.description = c.url.url;
+  c.mock = std::make_shared<mock::MockRobot>(std::move(world), robot_options);
+  c.bridge = std::make_unique<mock::MockBridge>(*c.mock, bridge_options);
+  return c;
+}
+
+RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options) {
+  const RobotUrl parsed = parse_robot_url(url);
+  if (parsed.kind == RobotUrl::Kind::kMock) {
+    auto world = std::make_shared<const mock::World>(mock::load_world(parsed.world_file));
     mock::MockRobotOptions ro;
     ro.frame_rate_hz = options.mock_frame_rate_hz;
-    c.mock = std::make_shared<mock::MockRobot>(world, ro);
     mock::MockBridgeOptions bo;
-    bo.description = c.url.url;
-    c.bridge = std::make_unique<mock::MockBridge>(*c.mock, bo);
+    bo.description = parsed.url;
+    RobotConnection c = open_mock_robot(std::move(world), ro, bo);
+    c.url = parsed;
     return c;
   }
+  RobotConnection c;
+  c.url = parsed;
   qi::QiBridgeOptions qo;
   qo.url = c.url.url;
   qo.user = options.user;

@@ -18,6 +18,7 @@
 #include <memory>
 #include <string>
 
+#include "naoqi_bridge/mock/mock_bridge.hpp"
 #include "naoqi_bridge/mock/mock_robot.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
 
@@ -47,6 +48,14 @@ struct RobotConnection {
   std::shared_ptr<naoqi_bridge::mock::MockRobot> mock;     ///< set for mock: URLs only
   std::unique_ptr<naoqi_bridge::RobotBridge> bridge;       ///< declared last: destroyed first
 };
+
+/// An in-process simulated Pepper over an already loaded world, with the simulated robot's and
+/// the WiFi link's options (lighting, camera noise seed, command latency, frame drops). The
+/// evaluation and `replay --robot mock:... --mock-start K` build their robot with it, so the same
+/// world, start and seed give the same replay. Does not connect.
+RobotConnection open_mock_robot(std::shared_ptr<const naoqi_bridge::mock::World> world,
+                                const naoqi_bridge::mock::MockRobotOptions& robot_options,
+                                naoqi_bridge::mock::MockBridgeOptions bridge_options);
 
 /// Builds the bridge for `url` (does not connect).
 RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options);

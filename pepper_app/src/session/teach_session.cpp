@@ -23,7 +23,6 @@ using Clock = std::chrono::steady_clock;
 std::vector<std::string> TeachSessionOptions::validate() const {
   std::vector<std::string> e;
   if (map_dir.empty()) e.push_back("map_dir must be given");
-  if (recording_dir.empty()) e.push_back("recording_dir must be given");
   if (max_distance_m < 0) e.push_back("max_distance_m must be >= 0");
   if (max_frames < 0) e.push_back("max_frames must be >= 0");
   if (frame_timeout_ms < 100 || frame_timeout_ms > 10000)
@@ -88,7 +87,9 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                           {"head_locked", head.holding},
                           {"detail", bridge.describe()}}},
                         {"recording", recording}});
-    writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json);
+    if (!options.recording_dir.empty()) {
+      writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json);
+    }
     teacher.emplace(camera, options.teach);
     link.event({{"event", "teach_started"},
                 {"recording", options.recording_dir.string()},
@@ -182,6 +183,9 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       std::optional<Eigen::Vector2d> pos;
       if (robot.mock) {
         const auto gt = robot.mock->ground_truth();
+        if (gt.collision) {
+          throw std::runtime_error("the simulated robot collided with " + gt.collision->what);
+        }
         pos = Eigen::Vector2d(gt.base.x_m, gt.base.y_m);
         if (prev_pos) result.distance_m += (*pos - *prev_pos).norm();
         prev_pos = pos;
@@ -190,7 +194,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       }
 
       if (recording) {
-        writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
+        if (writer) writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
+        ++result.frames_recorded;
         const core::mapping::TeachStep step = teacher->add_frame(*frame, commanded_m);
         if (pos) result.path_m.push_back(*pos);
         // The first frame is always key image 0 (the teacher does not report it as a new one).
@@ -272,7 +277,6 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     result.error = e.what();
   }
 
-  if (writer) result.frames_recorded = writer->frame_count();
   if (teacher) result.frames_seen = teacher->frames_seen();
   // Save what can be saved: the recording is already on disk; now the map.
   if (teacher && teacher->frames_seen() >= 2) {

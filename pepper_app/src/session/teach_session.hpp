@@ -32,7 +32,9 @@ namespace pepper::app {
 
 struct TeachSessionOptions {
   std::filesystem::path map_dir;        ///< required; written atomically at the end
-  std::filesystem::path recording_dir;  ///< required; must not exist or be empty
+  /// Where the frames are recorded (must not exist or be empty); empty: no recording (the
+  /// evaluation, which re-teaches from the world file). The CLI always records.
+  std::filesystem::path recording_dir;
   naoqi_bridge::CameraRequest camera;
   naoqi_bridge::HeadLockRequest head;
   core::mapping::TeachOptions teach;
@@ -53,7 +55,7 @@ struct TeachSessionOptions {
 struct TeachResult {
   std::string outcome;  ///< "finished", "interrupted", "failed"
   std::string error;    ///< what failed ("" otherwise)
-  int64_t frames_recorded = 0;
+  int64_t frames_recorded = 0;  ///< frames taught (and written, when recording)
   int64_t frames_seen = 0;
   int key_images = 0;
   bool map_saved = false;

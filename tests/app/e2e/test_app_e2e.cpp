@@ -174,6 +174,50 @@ TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
   EXPECT_TRUE(fs::exists(report["path"].get<std::string>()));
 }
 
+// `evaluate` scores the replay loop that users run: the same world, start and seed through
+// `evaluate` and through `replay --robot mock:... --mock-start K --seed S` send the same command
+// on every frame and end the same way (issue 28).
+TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
+  const fs::path dir = fresh_dir("equivalence");
+  const std::string world =
+      std::string(PEPPER_SOURCE_DIR) + "/tests/app/evaluation/data/small_room.yaml";
+  Child eval({"evaluate", "--world", world, "--starts", "2", "--run", "2", "--seed", "3", "--size",
+              "320x240", "--map-dir", (dir / "maps").string(), "--trace",
+              (dir / "trace").string(), "--json", (dir / "eval.json").string(), "--quiet"},
+             dir, "evaluate");
+  const int eval_rc = eval.wait(std::chrono::seconds(300));
+  ASSERT_TRUE(eval_rc == 0 || eval_rc == 1) << eval.both();
+  std::ifstream eval_json(dir / "eval.json");
+  const auto results = nlohmann::json::parse(eval_json);
+  ASSERT_EQ(results["evaluations"][0]["runs"].size(), 1u) << results.dump();
+  const auto& run = results["evaluations"][0]["runs"][0];
+
+  // Run 2 is start index 1.
+  Child replay(cat({"replay", "--robot", "mock:" + world, "--map",
+                    (dir / "maps" / "small_room_320x240").string(), "--mock-start", "1", "--seed",
+                    "3", "--mock-lighting", "teach", "--json", (dir / "replay.jsonl").string()},
+                   kQvga),
+               dir, "replay");
+  const int replay_rc = replay.wait(std::chrono::seconds(300));
+  const auto done = last_event(replay.out(), "replay_done");
+  ASSERT_TRUE(done.is_object()) << replay.both();
+
+  std::vector<nlohmann::json> eval_commands, replay_commands;
+  for (const auto& line : read_jsonl(dir / "trace" / "small_room_lines+points_none_run2.jsonl")) {
+    if (line.contains("command")) eval_commands.push_back(line["command"]);
+  }
+  for (const auto& line : read_jsonl(dir / "replay.jsonl")) replay_commands.push_back(line["command"]);
+  ASSERT_GT(replay_commands.size(), 50u);
+  ASSERT_EQ(eval_commands.size(), replay_commands.size()) << replay.both();
+  for (std::size_t i = 0; i < eval_commands.size(); ++i) {
+    ASSERT_EQ(eval_commands[i], replay_commands[i]) << "frame " << i;
+  }
+  // The same end: the evaluation's tour_complete is the replay's own decision.
+  EXPECT_EQ(run["tour_complete"].get<bool>(), done["outcome"] == "tour_complete") << replay.both();
+  EXPECT_EQ(done["outcome"], "tour_complete") << replay.both();
+  EXPECT_EQ(replay_rc, 0) << replay.both();
+}
+
 TEST(AppE2E, SigintDuringTeachKeepsRecordingAndStopsRobot) {
   const fs::path dir = fresh_dir("sigint");
   const fs::path rec = dir / "rec";

@@ -38,9 +38,11 @@ EvaluationOptions qvga_options() {
 }
 
 // Bounds: the run must converge and end where the tour ends (final position within 0.3 m), and
-// stay near the taught path once converged: RMS <= 20 cm, max <= 30 cm (measured 12-16 cm RMS). The accuracy
-// target (RMS <= 5 cm, max <= 15 cm, the paper's result) is a figure the evaluation reports, not
-// a unit-test bound; its measured values are in docs/evaluation.md.
+// stay near the taught path once converged. Max <= 15 cm is the product's target. RMS <= 8 cm
+// is the target (5 cm) plus margin: with the default VNHV controller through the shared replay
+// loop this QVGA tour measured 4.6 / 9.2 cm and 5.5 / 10.6 cm (RMS / max, runs 1 and 2; `pepper_app
+// evaluate --world tests/app/evaluation/data/small_room.yaml --starts 2 --seed 3 --size 320x240`).
+// The targets at VGA on the shipped worlds are figures the evaluation reports (docs/evaluation.md).
 TEST(ClosedLoop, ShortTourWithOneTurnConvergesFromPerturbedStarts) {
   const test::TempDir tmp("eval");
   EvaluationOptions o = qvga_options();
@@ -61,8 +63,8 @@ TEST(ClosedLoop, ShortTourWithOneTurnConvergesFromPerturbedStarts) {
     EXPECT_TRUE(r.tour_complete);
     EXPECT_TRUE(r.success);
     EXPECT_EQ(r.outcome, "complete");
-    EXPECT_LE(r.lateral_rms_m, 0.20);
-    EXPECT_LE(r.lateral_max_m, 0.30);
+    EXPECT_LE(r.lateral_rms_m, 0.08);
+    EXPECT_LE(r.lateral_max_m, 0.15);
     EXPECT_LE(r.final_error_m, 0.3);
     EXPECT_GT(r.travelled_m, 4.0);
     for (const RunSample& s : r.samples) ASSERT_TRUE(std::isfinite(s.omega_rad_s));

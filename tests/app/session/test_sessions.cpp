@@ -188,6 +188,97 @@ TEST(ReplaySessionSafety, NavigatorStopReasonSendsStop) {
   EXPECT_TRUE(log.back().stop_move);
 }
 
+// A replay that can never localise ends by itself with the best candidate and advice, instead of
+// waiting with the robot standing still (issue 30); the base never moved.
+TEST(ReplaySessionSafety, NotLocalisedGivesUpWithAdvice) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  ReplaySessionOptions o = replay_options();
+  o.max_frames = 0;
+  o.give_up_not_localised_s = 2.0;
+  int n = 0;
+  const ReplayResult r =
+      run_replay_session(robot, dummy_map(robot), o, link, [&](const core::Frame& f) {
+        ++n;
+        nav::StepResult s;
+        s.command = {0.0, 0.0, true, nav::StopReason::kNotLocalized};
+        s.telemetry.t_ns = f.t_ns;
+        s.telemetry.localization_ran = true;
+        s.telemetry.localization_best = 1;
+        s.telemetry.localization_best_count = 7;
+        return s;
+      });
+  EXPECT_EQ(r.outcome, "not_localised");
+  EXPECT_NE(r.detail.find("key image 1 with 7"), std::string::npos) << r.detail;
+  EXPECT_NE(r.detail.find("place the robot"), std::string::npos) << r.detail;
+  // 15 fps: just over 2 s of frames (the first frame is t = 0).
+  EXPECT_GE(n, 31);
+  EXPECT_LE(n, 33);
+  EXPECT_FALSE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+// Stopped for any reason after driving (lost features, overdue segment ...) for longer than the
+// give-up time: the replay ends as "lost" with the base stopped.
+TEST(ReplaySessionSafety, StoppedAfterDrivingGivesUp) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  ReplaySessionOptions o = replay_options();
+  o.max_frames = 0;
+  o.give_up_lost_s = 1.0;
+  int n = 0;
+  const ReplayResult r =
+      run_replay_session(robot, dummy_map(robot), o, link, [&](const core::Frame& f) {
+        nav::StepResult s = driving_step(f);
+        if (++n > 10) s.command = {0.0, 0.0, true, nav::StopReason::kFeaturesLost};
+        return s;
+      });
+  EXPECT_EQ(r.outcome, "lost");
+  EXPECT_NE(r.detail.find("features_lost"), std::string::npos) << r.detail;
+  EXPECT_GE(n, 10 + 15);
+  EXPECT_LE(n, 10 + 17);
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
+/// Ends the replay at a given frame, records what it saw.
+class EndingMonitor final : public ReplayMonitor {
+ public:
+  explicit EndingMonitor(int end_at) : end_at_(end_at) {}
+  std::optional<ReplayEnd> after_iteration(const nav::StepResult* step,
+                                           const ReplaySample* sample) override {
+    ++calls;
+    if (step && sample) {
+      ++steps;
+      EXPECT_EQ(sample->v_m_s, step->command.v_m_s);
+      EXPECT_GE(sample->step_ms, 0.0);
+    }
+    if (steps == end_at_) return ReplayEnd{"diverged", "left the path"};
+    return std::nullopt;
+  }
+  int calls = 0, steps = 0;
+
+ private:
+  int end_at_;
+};
+
+// The evaluation's monitor sees every frame after its command was sent, and the end it asks for
+// stops the base like every other way out.
+TEST(ReplaySessionSafety, MonitorEndStopsTheBase) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  EndingMonitor monitor(9);
+  ReplaySessionOptions o = replay_options();
+  o.monitor = &monitor;
+  const ReplayResult r = run_replay_session(robot, dummy_map(robot), o, link, driving_step);
+  EXPECT_EQ(r.outcome, "diverged");
+  EXPECT_EQ(r.detail, "left the path");
+  EXPECT_EQ(monitor.steps, 9);
+  EXPECT_EQ(r.frames, 9);
+  EXPECT_TRUE(ever_moved(*robot.mock));
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
 TEST(ReplaySessionSafety, WrongCameraSizeRefusedBeforeMoving) {
   RobotConnection robot = open_robot(kWorld, {});
   SessionLink link(nullptr, nullptr);

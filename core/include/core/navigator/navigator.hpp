@@ -59,7 +59,10 @@ const char* to_string(ControllerKind k);
 features::MatcherOptions matcher_for(control::FeatureMode mode, features::MatcherOptions base);
 
 struct NavigatorOptions {
-  ControllerKind controller = ControllerKind::kIbvs;
+  /// VNHV (Blanc et al. 2004) by default: the measured configuration (docs/evaluation.md; with
+  /// IBVS, room_corridor_room succeeded in 1 of 5 replays at VGA, issue 28). IBVS steers where
+  /// VNHV has no segment model.
+  ControllerKind controller = ControllerKind::kVnhv;
   /// Lines, points or both (METHOD.md; the paper's comparison): the Navigator matches only these
   /// (matcher_for), so localisation, switching, both control laws and the scale ratio see only
   /// them; it also sets ibvs.mode to this.
