@@ -31,6 +31,18 @@ struct ReplayArgs {
   std::string mock_command_log;
 };
 
+/// Exit codes (docs/user_guide.md "Exit codes"): 0 the tour was completed, 1 the replay ended
+/// without completing it (lost, not localised, overdue, STOP, stalled camera, frame limit),
+/// 3 the connection to the robot was lost, 4 an error (exception, collision, refused map),
+/// 130 interrupted (Ctrl-C).
+int replay_exit_code(const ReplayResult& r) {
+  if (r.tour_complete) return 0;
+  if (r.outcome == "interrupted") return 130;
+  if (r.outcome == "connection_lost") return 3;
+  if (r.outcome == "error" || r.outcome == "collision") return 4;
+  return 1;
+}
+
 int run_replay(const ReplayArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
@@ -57,7 +69,13 @@ int run_replay(const ReplayArgs& a) {
       robot.mock->set_lighting(a.mock_lighting);
     }
     ReplaySessionOptions o;
-    o.camera = camera_request(config);
+    // The map decides the camera size (an explicit conflicting --set is refused).
+    o.camera = camera_request_for_map(a.common, config, map.camera);
+    if (o.camera.width_px != config.robot.camera_width_px ||
+        o.camera.height_px != config.robot.camera_height_px) {
+      std::cerr << "replay: camera " << o.camera.width_px << "x" << o.camera.height_px
+                << ", the size the map was taught at\n";
+    }
     o.head = head_request(config);
     o.navigator = config.navigator_options();
     o.frame_timeout_ms = config.robot.frame_timeout_ms;
@@ -108,13 +126,27 @@ int run_replay(const ReplayArgs& a) {
             << "\n";
       }
     }
-    std::cerr << "replay " << r.outcome << ": " << r.frames << " frames, furthest key image "
-              << r.max_key_reached << " of " << r.key_image_count - 1 << "\n";
-    if (!r.error.empty()) return report_error(r.error);
-    if (r.outcome == "interrupted") return 130;
-    return r.tour_complete ? 0 : 1;
+    // One result line: the outcome, why, and how far the replay came.
+    std::cerr << "replay " << r.outcome << ": ";
+    if (!r.error.empty()) {
+      std::cerr << r.error << "; ";
+    } else if (!r.detail.empty()) {
+      std::cerr << r.detail << "; ";
+    }
+    std::cerr << r.frames << " frames, ";
+    if (r.max_key_reached < 0) {
+      std::cerr << "never localised in the map's " << r.key_image_count << " key images\n";
+    } else {
+      std::cerr << "furthest key image " << r.max_key_reached << " of " << r.key_image_count - 1
+                << "\n";
+    }
+    return replay_exit_code(r);
+  } catch (const ConfigError& e) {  // before anything moved: what to change is in the message
+    report_error(e.what());
+    return 2;
   } catch (const std::exception& e) {
-    return report_error(e.what());
+    report_error(e.what());
+    return 4;
   }
 }
 

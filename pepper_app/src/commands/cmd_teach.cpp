@@ -7,6 +7,7 @@
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
+#include "core/memory/visual_memory.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
 #include "session/teach_session.hpp"
@@ -24,7 +25,20 @@ struct TeachArgs {
   double max_distance_m = 0.0;
   int64_t max_frames = 0;
   std::string mock_command_log;
+  bool overwrite = false;
 };
+
+namespace fs = std::filesystem;
+
+/// A short description of what is in an existing map folder, for the refusal message.
+std::string describe_existing(const fs::path& dir) {
+  try {
+    const auto map = core::memory::load_map(dir);
+    return "a map with " + std::to_string(map.key_images.size()) + " key images";
+  } catch (const std::exception&) {
+    return "files that are not a readable map";
+  }
+}
 
 std::filesystem::path free_recording_dir(const std::filesystem::path& map) {
   std::filesystem::path base = map;
@@ -52,6 +66,17 @@ void write_command_log(const RobotConnection& robot, const std::string& file) {
 }
 
 int run_teach(const TeachArgs& a) {
+  const fs::path map_dir(a.map);
+  const bool map_exists =
+      fs::exists(map_dir) && !(fs::is_directory(map_dir) && fs::is_empty(map_dir));
+  if (map_exists && !a.overwrite) {
+    std::cerr << "pepper_app teach: " << map_dir.string() << " already holds "
+              << describe_existing(map_dir) << ": choose another --map, or add --overwrite "
+              << "(the old map is then kept as " << map_dir.string()
+              << ".previous until the new one is saved)\n";
+    return 2;
+  }
+  fs::path previous;  // where the old map waits while the new one is taught
   try {
     const AppConfig config = load_session_config(a.common);
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
@@ -80,6 +105,14 @@ int run_teach(const TeachArgs& a) {
         return 2;
       }
     }
+    if (map_exists) {
+      previous = map_dir;
+      previous += ".previous";
+      fs::remove_all(previous);
+      fs::rename(map_dir, previous);
+      std::cerr << "teach: the old map waits in " << previous.string()
+                << " until the new one is saved\n";
+    }
     install_interrupt_handlers();
     auto ui = start_session_ui(a.common, config);
     SessionLink link(ui.get(), &std::cout);
@@ -91,6 +124,16 @@ int run_teach(const TeachArgs& a) {
               << "\n";
     const TeachResult r = run_teach_session(robot, o, link);
     write_command_log(robot, a.mock_command_log);
+    if (!previous.empty()) {
+      if (r.map_saved) {
+        fs::remove_all(previous);
+      } else if (!fs::exists(map_dir)) {
+        fs::rename(previous, map_dir);
+        std::cerr << "teach: no new map was saved: the old map is back in " << map_dir.string()
+                  << "\n";
+      }
+      previous.clear();
+    }
     for (const auto& w : r.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
     std::cerr << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
               << o.recording_dir.string() << ", " << r.distance_m << " m";
@@ -100,6 +143,10 @@ int run_teach(const TeachArgs& a) {
     if (r.outcome == "interrupted") return 130;
     return r.map_saved ? 0 : 1;
   } catch (const std::exception& e) {
+    if (!previous.empty() && !fs::exists(map_dir)) {  // failed before a new map could be saved
+      std::error_code ec;
+      fs::rename(previous, map_dir, ec);
+    }
     return report_error(e.what());
   }
 }
@@ -116,7 +163,13 @@ void register_teach_command(CLI::App& app) {
       "the map saved. An interrupted teach keeps its recording: `pepper_app map build` turns it\n"
       "into a map.");
   add_common_session_options(cmd, args->common, true);
-  cmd->add_option("--map", args->map, "Map folder to write (replaced atomically)")->required();
+  cmd->add_option("--map", args->map,
+                  "Map folder to write (saved atomically); an existing map is refused unless "
+                  "--overwrite")
+      ->required();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Replace the map in --map; the old one waits in MAP.previous until the new one "
+                "is saved (and comes back if none is)");
   cmd->add_option("--recording", args->recording,
                   "Recording folder (default: MAP.recording, or MAP.recording.N if taken)");
   cmd->add_flag("--scripted", args->scripted,

@@ -48,6 +48,46 @@ naoqi_bridge::CameraRequest camera_request(const AppConfig& config) {
   return r;
 }
 
+namespace {
+
+/// Where the camera size was set explicitly ("--set" or the --config file), or "" when it is the
+/// default.
+std::string explicit_camera_size_source(const CommonSessionArgs& args) {
+  for (const auto& s : args.sets) {
+    if (s.rfind("robot.camera_width_px=", 0) == 0 || s.rfind("robot.camera_height_px=", 0) == 0) {
+      return "--set " + s;
+    }
+  }
+  if (!args.config_file.empty()) {
+    const nlohmann::json tree = read_config_file(args.config_file);
+    if (tree.is_object() && tree.contains("robot") && tree["robot"].is_object() &&
+        (tree["robot"].contains("camera_width_px") || tree["robot"].contains("camera_height_px"))) {
+      return "robot.camera_width_px/camera_height_px in " + args.config_file;
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+naoqi_bridge::CameraRequest camera_request_for_map(const CommonSessionArgs& args,
+                                                   const AppConfig& config,
+                                                   const core::CameraIntrinsics& map_camera) {
+  naoqi_bridge::CameraRequest r = camera_request(config);
+  const bool same = r.width_px == map_camera.width_px && r.height_px == map_camera.height_px;
+  if (same) return r;
+  const std::string source = explicit_camera_size_source(args);
+  if (!source.empty()) {
+    throw ConfigError("the map was taught at " + std::to_string(map_camera.width_px) + "x" +
+                      std::to_string(map_camera.height_px) + " but " + source + " asks for " +
+                      std::to_string(r.width_px) + "x" + std::to_string(r.height_px) +
+                      ": drop that setting (the map decides the camera size)");
+  }
+  r.width_px = map_camera.width_px;
+  r.height_px = map_camera.height_px;
+  return r;
+}
+
 naoqi_bridge::HeadLockRequest head_request(const AppConfig& config) {
   naoqi_bridge::HeadLockRequest r;
   r.head_yaw_rad = config.robot.head_yaw_rad;

@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "config/app_config.hpp"
+#include "core/camera/intrinsics.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
 #include "session/robot_connection.hpp"
 
@@ -40,6 +41,13 @@ AppConfig load_session_config(const CommonSessionArgs& args);
 RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config);
 naoqi_bridge::CameraRequest camera_request(const AppConfig& config);
 naoqi_bridge::HeadLockRequest head_request(const AppConfig& config);
+
+/// The camera request for replaying a map taught with `map_camera`: the map decides the size
+/// (the rest as camera_request). Throws ConfigError, naming the setting to drop, when a --set or
+/// the --config file explicitly asks for another size.
+naoqi_bridge::CameraRequest camera_request_for_map(const CommonSessionArgs& args,
+                                                   const AppConfig& config,
+                                                   const core::CameraIntrinsics& map_camera);
 
 /// Starts the UI when --ui or --ui-port was given (else returns null) and announces its URL.
 std::unique_ptr<teach_ui::UiServer> start_session_ui(const CommonSessionArgs& args,

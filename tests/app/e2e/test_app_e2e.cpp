@@ -297,6 +297,52 @@ TEST(AppE2E, ConfigDumpRoundTrips) {
   EXPECT_NE(dump.out().find("camera_fps: 10"), std::string::npos) << dump.out();
 }
 
+// An existing map is never replaced by accident, and the map decides the camera size (issue 30).
+TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
+  const fs::path dir = fresh_dir("overwrite");
+  const std::string map = (dir / "map").string();
+  auto teach_args = [&](std::vector<std::string> extra) {
+    return cat(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", map, "--max-distance",
+                    "0.5"},
+                   kQvga),
+               extra);
+  };
+  Child first(teach_args({}), dir, "first");
+  ASSERT_EQ(first.wait(), 0) << first.both();
+  const auto taught = core::memory::load_map(map);
+
+  Child again(teach_args({}), dir, "again");
+  EXPECT_EQ(again.wait(), 2) << again.both();
+  EXPECT_NE(again.err().find("--overwrite"), std::string::npos) << again.both();
+  EXPECT_NE(again.err().find(std::to_string(taught.key_images.size()) + " key images"),
+            std::string::npos)
+      << again.both();
+  EXPECT_EQ(core::memory::load_map(map).key_images.size(), taught.key_images.size());
+
+  Child replaced(teach_args({"--overwrite"}), dir, "replaced");
+  EXPECT_EQ(replaced.wait(), 0) << replaced.both();
+  EXPECT_FALSE(fs::exists(dir / "map.previous"));
+  EXPECT_NO_THROW(core::memory::load_map(map));
+
+  // Replay with the default (VGA) configuration: the QVGA map decides, and says so.
+  Child replay({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--max-frames", "20"},
+               dir, "replay");
+  EXPECT_EQ(replay.wait(), 1) << replay.both();  // 1: ended (frame limit) before the end
+  EXPECT_NE(replay.err().find("camera 320x240, the size the map was taught at"),
+            std::string::npos)
+      << replay.both();
+  // Exactly one result line.
+  const std::string err = replay.err();
+  EXPECT_EQ(err.find("replay max_frames"), err.rfind("replay max_frames")) << err;
+
+  // An explicit conflicting size is refused before connecting, naming what to drop.
+  Child vga({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--set",
+             "robot.camera_width_px=640", "--set", "robot.camera_height_px=480"},
+            dir, "vga");
+  EXPECT_EQ(vga.wait(), 2) << vga.both();
+  EXPECT_NE(vga.err().find("drop that setting"), std::string::npos) << vga.both();
+}
+
 TEST(AppE2E, BadOptionsRefusedBeforeConnecting) {
   const fs::path dir = fresh_dir("badopt");
   Child teach({"teach", "--robot", "http://nowhere", "--map", (dir / "m").string()}, dir, "t");
