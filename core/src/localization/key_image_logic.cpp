@@ -1,6 +1,7 @@
 #include "core/localization/key_image_logic.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -63,12 +64,6 @@ InitialLocalizationResult localize_from_counts(std::span<const int> counts,
   return r;
 }
 
-SwitchCriterion switch_criterion(const SwitchCounts& c) {
-  const bool three = c.three_view_next > c.three_view_prev;
-  const bool two = c.two_view_next_next > c.two_view_next && c.two_view_next_next > c.two_view_prev;
-  return static_cast<SwitchCriterion>((three ? 1 : 0) | (two ? 2 : 0));
-}
-
 std::vector<std::string> SwitcherOptions::validate() const {
   std::vector<std::string> errors;
   if (consecutive_frames < 1) {
@@ -112,6 +107,71 @@ KeyImageSwitcher::KeyImageSwitcher(Segment segment, int key_image_count,
   }
 }
 
+namespace {
+
+using Kind = SwitchRule::Kind;
+
+bool three_view_rule(const SwitchCounts& c, const SwitcherOptions&) {
+  return c.three_view_next > c.three_view_prev;
+}
+bool two_view_rule(const SwitchCounts& c, const SwitcherOptions&) {
+  return c.two_view_next_next > c.two_view_next && c.two_view_next_next > c.two_view_prev;
+}
+// Unknown scale (too few verified points, e.g. facing a plain wall): the guard cannot judge, so
+// it blocks only when the caller says a blind switch is not allowed yet; blocking for good
+// would stall at IN.
+bool scale_guard_blocks(const SwitchCounts& c, const SwitcherOptions& o) {
+  if (o.min_next_scale_ratio <= 0.0) return false;
+  return std::isnan(c.next_scale_ratio) ? !c.blind_switch_allowed
+                                        : !(c.next_scale_ratio >= o.min_next_scale_ratio);
+}
+bool passed_next(const SwitchCounts& c, const SwitcherOptions& o) {
+  return o.passed_next_scale_ratio > 0.0 && c.next_scale_ratio >= o.passed_next_scale_ratio;
+}
+bool passed_by_distance(const SwitchCounts& c, const SwitcherOptions&) {
+  return c.passed_by_distance;
+}
+
+// clang-format off
+const std::array<SwitchRule, 5> kSwitchRules{{
+  {"three views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kThreeView),
+   three_view_rule, "nL + nP (Ia, IN, INN) > nL + nP (IP, Ia, IN) (METHOD.md)"},
+  {"two views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kTwoView), two_view_rule,
+   "n(Ia, INN) > n(Ia, IN) and n(Ia, INN) > n(IP, Ia) (METHOD.md)"},
+  {"scale guard", Kind::kGuard,
+   "navigator.switching.min_next_scale_ratio, navigator.blind_switch_min_driven_fraction",
+   kCriterionGuardBlocked, scale_guard_blocks,
+   "the paper's rules fire too early on short segments: wait until IN's points appear at "
+   "nearly their taught size (unknown size: until the commands drove part of the segment)"},
+  {"passed IN", Kind::kAddition, "navigator.switching.passed_next_scale_ratio",
+   kCriterionPassedNext, passed_next,
+   "IN's points appear larger than taught: the robot is past IN (with near-identical IN and "
+   "INN the paper's rules can stall)"},
+  {"passed IN by distance", Kind::kAddition, "navigator.blind_passed_driven_factor",
+   kCriterionPassedByDistance, passed_by_distance,
+   "scale unknown and the commands drove well past the taught length (a bare wall)"},
+}};
+// clang-format on
+
+}  // namespace
+
+std::span<const SwitchRule> switch_rules() { return kSwitchRules; }
+
+SwitchCriterion switch_criterion(const SwitchCounts& c) {
+  const SwitcherOptions none;
+  return static_cast<SwitchCriterion>((three_view_rule(c, none) ? 1 : 0) |
+                                      (two_view_rule(c, none) ? 2 : 0));
+}
+
+const char* to_string(SwitchRule::Kind k) {
+  switch (k) {
+    case Kind::kPaper: return "paper rule";
+    case Kind::kGuard: return "guard (blocks the paper rules)";
+    case Kind::kAddition: return "addition (wants a switch)";
+  }
+  return "?";
+}
+
 SwitchUpdate KeyImageSwitcher::update(const SwitchCounts& counts, bool reached_final) {
   SwitchUpdate u;
   if (complete_) {
@@ -120,22 +180,26 @@ SwitchUpdate KeyImageSwitcher::update(const SwitchCounts& counts, bool reached_f
   }
   bool wanted = false;
   if (segment_.next_next) {
-    u.criterion = switch_criterion(counts);
-    u.criteria_bits = static_cast<int>(u.criterion);
-    const double ratio = counts.next_scale_ratio;  // NaN compares false
-    const bool passed =
-        options_.passed_next_scale_ratio > 0.0 && ratio >= options_.passed_next_scale_ratio;
-    // Unknown scale (too few verified points, e.g. facing a plain wall): the guard cannot
-    // judge, so the paper's rules decide alone; blocking here would stall at IN for good.
-    const bool guard_ok =
-        options_.min_next_scale_ratio <= 0.0 ||
-        (std::isnan(ratio) ? counts.blind_switch_allowed : ratio >= options_.min_next_scale_ratio);
-    if (passed) u.criteria_bits |= kCriterionPassedNext;
-    if (counts.passed_by_distance) u.criteria_bits |= kCriterionPassedByDistance;
-    if (u.criterion != SwitchCriterion::kNone && !guard_ok)
-      u.criteria_bits |= kCriterionGuardBlocked;
-    wanted = (u.criterion != SwitchCriterion::kNone && guard_ok) || passed ||
-             counts.passed_by_distance;
+    bool paper = false, blocked = false, added = false;
+    for (const SwitchRule& r : switch_rules()) {
+      if (!r.holds(counts, options_)) continue;
+      switch (r.kind) {
+        case Kind::kPaper:
+          paper = true;
+          u.criteria_bits |= r.criterion_bit;
+          break;
+        case Kind::kGuard:
+          blocked = true;
+          break;
+        case Kind::kAddition:
+          added = true;
+          u.criteria_bits |= r.criterion_bit;
+          break;
+      }
+    }
+    u.criterion = static_cast<SwitchCriterion>(u.criteria_bits & 3);
+    if (paper && blocked) u.criteria_bits |= kCriterionGuardBlocked;
+    wanted = (paper && !blocked) || added;
   } else {
     wanted = reached_final;
   }

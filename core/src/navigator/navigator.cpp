@@ -1,4 +1,5 @@
 #include "core/navigator/navigator.hpp"
+#include "core/navigator/transitions.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -311,7 +312,7 @@ void Navigator::remember_tracks(const features::FrameMatcher& fm) {
   }
 }
 
-void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
+bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
   const auto t0 = Clock::now();
   const localization::InitialLocalizationReport report =
       localization::localize_in_map(fm, map_, options_.initial);
@@ -322,11 +323,11 @@ void Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
   if (report.result.segment) {
     switcher_.emplace(*report.result.segment, static_cast<int>(map_.key_images.size()),
                       options_.switching);
-    state_ = NavState::kNavigating;
     schedule_.reset();
     has_command_ = false;
   }
   tel.timings.localize_ms = ms_since(t0);
+  return report.result.segment.has_value();
 }
 
 std::optional<double> Navigator::ibvs_omega(features::FrameMatcher& fm, Telemetry& tel) {
@@ -527,8 +528,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   return control::vnhv_omega(v, est->lateral_m, est->heading_rad, o, vnhv_curvature_1_m_);
 }
 
-StepResult Navigator::step(const Frame& frame) {
-  const auto t_start = Clock::now();
+void Navigator::check_frame(const Frame& frame) const {
   if (frame.gray.empty() || frame.gray.type() != CV_8UC1) {
     throw std::invalid_argument("Navigator::step: frame " + std::to_string(frame.index) +
                                 " is not a non-empty CV_8UC1 image");
@@ -544,40 +544,25 @@ StepResult Navigator::step(const Frame& frame) {
     throw std::invalid_argument("Navigator::step: t_ns " + std::to_string(frame.t_ns) +
                                 " is before the previous frame's " + std::to_string(*last_t_ns_));
   }
+}
+
+void Navigator::account_commanded_motion(int64_t t_ns) {
   if (last_t_ns_ && has_command_ && !last_command_.stop) {
     // The command sent after the previous frame drove the robot until now (blind switches,
     // turn feed-forward).
-    const double dt_s = static_cast<double>(frame.t_ns - *last_t_ns_) * 1e-9;
+    const double dt_s = static_cast<double>(t_ns - *last_t_ns_) * 1e-9;
     segment_driven_m_ += last_command_.v_m_s * dt_s;
     segment_turned_rad_ += last_command_.omega_rad_s * dt_s;
   }
-  last_t_ns_ = frame.t_ns;
+  last_t_ns_ = t_ns;
+}
 
-  StepResult out;
-  Telemetry& tel = out.telemetry;
-  tel.t_ns = frame.t_ns;
-  tel.frame_index = frame.index;
-  auto finish = [&](const Command& c) {
-    out.command = c;
-    tel.state = state_;
-    tel.reason = c.reason;
-    if (switcher_) {
-      const auto& seg = switcher_->segment();
-      tel.ip = seg.prev;
-      tel.in = seg.next;
-      tel.inn = seg.next_next.value_or(-1);
-    }
-    tel.timings.total_ms = ms_since(t_start);
-    return out;
-  };
-  if (state_ == NavState::kTourComplete) return finish(stop_command(StopReason::kTourComplete));
-  if (state_ == NavState::kOverdue) return finish(stop_command(StopReason::kSegmentOverdue));
-
-  const bool need_localization = state_ == NavState::kNotLocalized || state_ == NavState::kLost;
-  auto t0 = Clock::now();
+features::FrameMatcher Navigator::perceive(const Frame& frame, bool for_localisation,
+                                           Telemetry& tel) {
+  const auto t0 = Clock::now();
   unsigned parts = features::kPartsCurrentFrame;
   // ORB keypoints: for the initial localisation, and every frame with the ORB fallback.
-  if (need_localization ||
+  if (for_localisation ||
       (options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points)) {
     parts |= features::kPartWideBaseline;
   }
@@ -585,104 +570,84 @@ StepResult Navigator::step(const Frame& frame) {
   for (auto& [i, points] : klt_priors_) fm.set_klt_prior(i, std::move(points));
   klt_priors_.clear();
   tel.timings.extract_ms = ms_since(t0);
+  return fm;
+}
 
-  if (need_localization) {
-    const NavState before = state_;
-    localize(fm, tel);
-    if (state_ != NavState::kNavigating) {
-      return finish(stop_command(before == NavState::kLost ? StopReason::kFeaturesLost
-                                                           : StopReason::kNotLocalized));
-    }
-    begin_segment(frame.t_ns, /*from_switch=*/false);
-    final_ratio_in_ = -1;  // a new segment: no ratio seen on it yet
+Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Telemetry& tel) {
+  const localization::Segment seg = switcher_->segment();
+  ensure_pyramids(seg);
+  const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
+  tel.n_lines_next = tv_n.n_lines();
+  tel.n_points_next = tv_n.n_points();
+  SegmentEvidence ev;
+  localization::SwitchCounts& counts = ev.counts;
+  counts.two_view_next = tv_n.total();
+  counts.blind_switch_allowed = blind_switch_allowed();
+  const int min_points =
+      seg.next_next ? options_.min_scale_points : options_.arrival_min_scale_points;
+  if (const auto ratio = scale_ratio(fm.two_view_for_control(seg.next, key(seg.next)),
+                                     key(seg.next), fm.current(), min_points)) {
+    counts.next_scale_ratio = *ratio;
+    tel.next_scale_ratio = *ratio;
   }
-
-  // Switching (counts on the current segment).
-  t0 = Clock::now();
-  {
-    const localization::Segment seg = switcher_->segment();
-    ensure_pyramids(seg);
-    const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
-    tel.n_lines_next = tv_n.n_lines();
-    tel.n_points_next = tv_n.n_points();
-    localization::SwitchCounts counts;
-    counts.two_view_next = tv_n.total();
-    counts.blind_switch_allowed = blind_switch_allowed();
-    bool reached_final = false;
-    const int min_points =
-        seg.next_next ? options_.min_scale_points : options_.arrival_min_scale_points;
-    if (const auto ratio = scale_ratio(fm.two_view_for_control(seg.next, key(seg.next)),
-                                       key(seg.next), fm.current(), min_points)) {
-      counts.next_scale_ratio = *ratio;
-      tel.next_scale_ratio = *ratio;
-    }
-    if (seg.next_next && options_.blind_passed_driven_factor > 0.0 && segment_from_switch_ &&
-        std::isnan(counts.next_scale_ratio)) {
-      counts.passed_by_distance =
-          segment_driven_m_ >= options_.blind_passed_driven_factor * segment_taught_m();
-    }
-    if (seg.next_next) {
-      const int nn = *seg.next_next;
-      const features::TwoViewMatches& tv_nn = fm.two_view(nn, key(nn));  // control needs it too
-      tel.n_lines_next_next = tv_nn.n_lines();
-      tel.n_points_next_next = tv_nn.n_points();
-      counts.two_view_next_next = tv_nn.total();
-      // Lazy evaluation (same decisions as computing everything, see KeyImageSwitcher): when
-      // the scale guard blocks, the paper's rules do not matter; n(IP, Ia) matters only if
-      // n(Ia, INN) > n(Ia, IN); the three-view counts only if the two-view rule fails.
-      const auto& sw = options_.switching;
-      const bool guard_blocks = sw.min_next_scale_ratio > 0.0 &&
-                                counts.next_scale_ratio < sw.min_next_scale_ratio;  // NaN: false
-      if (!guard_blocks) {
-        bool two_view_rule = false;
-        if (counts.two_view_next_next > counts.two_view_next) {
-          tel.n_prev = fm.two_view(seg.prev, key(seg.prev)).total();
-          counts.two_view_prev = tel.n_prev;
-          two_view_rule = counts.two_view_next_next > counts.two_view_prev;
-        }
-        if (!two_view_rule) {
-          counts.three_view_next = fm.three_view(seg.next, key(seg.next), nn, key(nn)).total();
-          counts.three_view_prev =
-              fm.three_view(seg.prev, key(seg.prev), seg.next, key(seg.next)).total();
-          tel.n_three_view_next = counts.three_view_next;
-          tel.n_three_view_prev = counts.three_view_prev;
-        }
-      }
-    } else {
-      const double ratio = counts.next_scale_ratio;
-      if (final_ratio_in_ != seg.next) {
-        final_ratio_in_ = seg.next;
-        final_best_ratio_ = std::numeric_limits<double>::quiet_NaN();
-      }
-      if (!std::isnan(ratio) && !(ratio <= final_best_ratio_)) final_best_ratio_ = ratio;
-      const bool faded = options_.arrival_fade_ratio > 0.0 && std::isnan(ratio) &&
-                         final_best_ratio_ >= options_.arrival_fade_ratio;  // NaN: false
-      reached_final = ratio >= options_.arrival_scale_ratio || faded;  // NaN: false
-    }
-    const localization::SwitchUpdate u = switcher_->update(counts, reached_final);
-    tel.switch_streak = u.streak;
-    tel.switch_criterion = u.criteria_bits;
-    tel.switched = u.event == localization::SwitchEvent::kSwitched;
-    if (u.event == localization::SwitchEvent::kTourComplete) {
-      state_ = NavState::kTourComplete;
-      schedule_.reset();
-      tel.timings.match_ms = ms_since(t0);
-      return finish(stop_command(StopReason::kTourComplete));
-    }
-    if (tel.switched) {
-      ensure_pyramids(switcher_->segment());
-      begin_segment(frame.t_ns, /*from_switch=*/true);
-    }
-    if (segment_overdue(frame.t_ns)) {
-      state_ = NavState::kOverdue;
-      schedule_.reset();
-      has_command_ = false;
-      tel.timings.match_ms = ms_since(t0);
-      return finish(stop_command(StopReason::kSegmentOverdue));
-    }
+  if (seg.next_next && options_.blind_passed_driven_factor > 0.0 && segment_from_switch_ &&
+      std::isnan(counts.next_scale_ratio)) {
+    counts.passed_by_distance =
+        segment_driven_m_ >= options_.blind_passed_driven_factor * segment_taught_m();
   }
+  if (seg.next_next) {
+    const int nn = *seg.next_next;
+    const features::TwoViewMatches& tv_nn = fm.two_view(nn, key(nn));  // control needs it too
+    tel.n_lines_next_next = tv_nn.n_lines();
+    tel.n_points_next_next = tv_nn.n_points();
+    counts.two_view_next_next = tv_nn.total();
+    // Lazy evaluation (same decisions as computing everything, see KeyImageSwitcher): when
+    // the scale guard blocks, the paper's rules do not matter; n(IP, Ia) matters only if
+    // n(Ia, INN) > n(Ia, IN); the three-view counts only if the two-view rule fails.
+    const auto& sw = options_.switching;
+    const bool guard_blocks = sw.min_next_scale_ratio > 0.0 &&
+                              counts.next_scale_ratio < sw.min_next_scale_ratio;  // NaN: false
+    if (!guard_blocks) {
+      bool two_view_rule = false;
+      if (counts.two_view_next_next > counts.two_view_next) {
+        tel.n_prev = fm.two_view(seg.prev, key(seg.prev)).total();
+        counts.two_view_prev = tel.n_prev;
+        two_view_rule = counts.two_view_next_next > counts.two_view_prev;
+      }
+      if (!two_view_rule) {
+        counts.three_view_next = fm.three_view(seg.next, key(seg.next), nn, key(nn)).total();
+        counts.three_view_prev =
+            fm.three_view(seg.prev, key(seg.prev), seg.next, key(seg.next)).total();
+        tel.n_three_view_next = counts.three_view_next;
+        tel.n_three_view_prev = counts.three_view_prev;
+      }
+    }
+  } else {
+    const double ratio = counts.next_scale_ratio;
+    if (final_ratio_in_ != seg.next) {
+      final_ratio_in_ = seg.next;
+      final_best_ratio_ = std::numeric_limits<double>::quiet_NaN();
+    }
+    if (!std::isnan(ratio) && !(ratio <= final_best_ratio_)) final_best_ratio_ = ratio;
+    const bool faded = options_.arrival_fade_ratio > 0.0 && std::isnan(ratio) &&
+                       final_best_ratio_ >= options_.arrival_fade_ratio;  // NaN: false
+    ev.reached_final = ratio >= options_.arrival_scale_ratio || faded;  // NaN: false
+  }
+  return ev;
+}
 
-  // Control on the (possibly new) segment.
+void Navigator::switch_key_images(const SegmentEvidence& ev, int64_t t_ns, StepFacts& facts,
+                                  Telemetry& tel) {
+  const localization::SwitchUpdate u = switcher_->update(ev.counts, ev.reached_final);
+  tel.switch_streak = u.streak;
+  tel.switch_criterion = u.criteria_bits;
+  tel.switched = u.event == localization::SwitchEvent::kSwitched;
+  facts.final_reached = u.event == localization::SwitchEvent::kTourComplete;
+  facts.switched = tel.switched;
+  facts.overdue = !facts.switched && segment_overdue(t_ns);
+}
+
+std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& tel) {
   std::optional<double> omega;
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
   if (!omega) {
@@ -696,43 +661,124 @@ StepResult Navigator::step(const Frame& frame) {
       omega = apply_taught_turn(*omega, tel);
     }
   }
-  tel.timings.match_ms = ms_since(t0);
   {  // display only; the control law above already computed (and cached) these matches
     const int in = switcher_->segment().next;
     tel.overlay = features::matched_overlay(fm.two_view_for_control(in, key(in)), fm.current(), in);
   }
-  t0 = Clock::now();
-  Command cmd;
-  if (omega) {
-    tel.omega_demand_rad_s = *omega;
-    const control::BaseCommand b = schedule_.step(*omega, frame.t_ns);
-    cmd.v_m_s = b.v_m_s;
-    cmd.omega_rad_s = b.omega_rad_s;
-    cmd.stop = false;
-    cmd.reason = StopReason::kNone;
-    tel.turning = b.turning;
-    state_ = NavState::kNavigating;
-    last_command_ = cmd;
-    last_good_t_ns_ = frame.t_ns;
-    has_command_ = true;
-  } else if (has_command_ && frame.t_ns - last_good_t_ns_ <= options_.hold_ns) {
-    state_ = NavState::kHolding;
-    cmd = last_command_;
-    tel.hold_elapsed_ns = frame.t_ns - last_good_t_ns_;
-    tel.turning = schedule_.turning();
-  } else {
-    tel.hold_elapsed_ns = has_command_ ? frame.t_ns - last_good_t_ns_ : 0;
-    state_ = NavState::kLost;
-    cmd = stop_command(StopReason::kFeaturesLost);
-    schedule_.reset();
-    has_command_ = false;
-    vnhv_segment_next_ = -1;
+  return omega;
+}
+
+Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double> demand,
+                        Telemetry& tel) {
+  if (!t.keeps_state) state_ = t.to;
+  switch (t.action) {
+    case Action::kStopTourComplete:
+      schedule_.reset();
+      return stop_command(StopReason::kTourComplete);
+    case Action::kStopOverdue:
+      schedule_.reset();
+      has_command_ = false;
+      return stop_command(StopReason::kSegmentOverdue);
+    case Action::kStopNotLocalised:
+      return stop_command(StopReason::kNotLocalized);
+    case Action::kStopFeaturesLost:
+      return stop_command(StopReason::kFeaturesLost);
+    case Action::kBeginSegment:
+      if (t.phase == Phase::kLocalise) {
+        begin_segment(t_ns, /*from_switch=*/false);
+        final_ratio_in_ = -1;  // a new segment: no ratio seen on it yet
+      } else {
+        ensure_pyramids(switcher_->segment());
+        begin_segment(t_ns, /*from_switch=*/true);
+      }
+      return {};
+    case Action::kContinue:
+      return {};
+    case Action::kDrive: {
+      tel.omega_demand_rad_s = *demand;
+      const control::BaseCommand b = schedule_.step(*demand, t_ns);
+      Command cmd;
+      cmd.v_m_s = b.v_m_s;
+      cmd.omega_rad_s = b.omega_rad_s;
+      cmd.stop = false;
+      cmd.reason = StopReason::kNone;
+      tel.turning = b.turning;
+      last_command_ = cmd;
+      last_good_t_ns_ = t_ns;
+      has_command_ = true;
+      return cmd;
+    }
+    case Action::kHold:
+      tel.hold_elapsed_ns = t_ns - last_good_t_ns_;
+      tel.turning = schedule_.turning();
+      return last_command_;
+    case Action::kLose:
+      tel.hold_elapsed_ns = has_command_ ? t_ns - last_good_t_ns_ : 0;
+      schedule_.reset();
+      has_command_ = false;
+      vnhv_segment_next_ = -1;
+      return stop_command(StopReason::kFeaturesLost);
   }
+  return stop_command(StopReason::kFeaturesLost);
+}
+
+// One frame: a pipeline of stages, with the decisions taken from the transition table
+// (transitions.hpp) at four points. docs/method/navigator.md "One frame".
+StepResult Navigator::step(const Frame& frame) {
+  const auto t_start = Clock::now();
+  check_frame(frame);
+  account_commanded_motion(frame.t_ns);
+  StepResult out;
+  Telemetry& tel = out.telemetry;
+  tel.t_ns = frame.t_ns;
+  tel.frame_index = frame.index;
+  StepFacts facts;
+  auto finish = [&](const Command& c) {
+    out.command = c;
+    tel.state = state_;
+    tel.reason = c.reason;
+    if (switcher_) {
+      const auto& seg = switcher_->segment();
+      tel.ip = seg.prev;
+      tel.in = seg.next;
+      tel.inn = seg.next_next.value_or(-1);
+    }
+    tel.timings.total_ms = ms_since(t_start);
+    return out;
+  };
+  if (const Transition* t = decide(Phase::kEntry, state_, facts)) {
+    return finish(take(*t, frame.t_ns, std::nullopt, tel));
+  }
+  // 1. Perceive (2. and localise when there is no segment).
+  const bool localising = decide(Phase::kLocalise, state_, facts) != nullptr;
+  features::FrameMatcher fm = perceive(frame, localising, tel);
+  if (localising) {
+    facts.localised = localize(fm, tel);
+    const Transition& t = *decide(Phase::kLocalise, state_, facts);
+    const Command c = take(t, frame.t_ns, std::nullopt, tel);
+    if (t.action != Action::kBeginSegment) return finish(c);
+  }
+  // 3. Associate with the segment's key images; 4. switch key images.
+  auto t0 = Clock::now();
+  switch_key_images(associate(fm, tel), frame.t_ns, facts, tel);
+  if (const Transition& t = *decide(Phase::kSegment, state_, facts);
+      t.action != Action::kContinue) {
+    const Command c = take(t, frame.t_ns, std::nullopt, tel);
+    if (t.action != Action::kBeginSegment) {
+      tel.timings.match_ms = ms_since(t0);
+      return finish(c);
+    }
+  }
+  // 5. Control on the (possibly new) segment; 6. speed, hold or stop.
+  const std::optional<double> demand = control(fm, tel);
+  tel.timings.match_ms = ms_since(t0);
+  t0 = Clock::now();
+  facts.has_demand = demand.has_value();
+  facts.within_hold = has_command_ && frame.t_ns - last_good_t_ns_ <= options_.hold_ns;
+  const Command cmd = take(*decide(Phase::kControl, state_, facts), frame.t_ns, demand, tel);
   tel.timings.control_ms = ms_since(t0);
   remember_tracks(fm);
-  Command final_cmd = cmd;
-  out.command = final_cmd;
-  finish(final_cmd);
+  finish(cmd);
   if (state_ == NavState::kLost) {
     // Keep the last segment in telemetry for this frame, then forget it (relocalise next).
     switcher_.reset();

@@ -105,6 +105,22 @@ struct SwitcherOptions {
   std::vector<std::string> validate() const;
 };
 
+/// One rule of the switcher's "wanted" decision while INN exists, as a table row. A switch is
+/// wanted when a paper rule holds and no guard blocks, or when an addition holds.
+struct SwitchRule {
+  enum class Kind { kPaper, kGuard, kAddition };
+  const char* name;
+  Kind kind;
+  const char* option;  ///< the option(s) behind it ("" for the paper's rules)
+  int criterion_bit;   ///< Telemetry::switch_criterion bit set when it holds (guard: blocked)
+  bool (*holds)(const SwitchCounts&, const SwitcherOptions&);
+  const char* why;
+};
+
+/// The rules KeyImageSwitcher::update applies, in order (docs/method/navigator.md prints them).
+std::span<const SwitchRule> switch_rules();
+const char* to_string(SwitchRule::Kind k);
+
 enum class SwitchEvent { kNone, kSwitched, kTourComplete };
 
 const char* to_string(SwitchEvent e);

@@ -48,6 +48,7 @@
 #include "core/localization/key_image_logic.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "core/navigator/telemetry.hpp"
+#include "core/navigator/transitions.hpp"
 
 namespace pepper::core::navigator {
 
@@ -206,7 +207,27 @@ class Navigator {
   const NavigatorOptions& options() const { return options_; }
 
  private:
-  void localize(features::FrameMatcher& fm, Telemetry& tel);
+  // step()'s stages, in order (docs/method/navigator.md "One frame").
+  void check_frame(const Frame& frame) const;
+  /// The command in force since the previous frame drove the segment's distance and yaw.
+  void account_commanded_motion(int64_t t_ns);
+  /// Features of the frame (with ORB keypoints when localising or with the ORB fallback).
+  features::FrameMatcher perceive(const Frame& frame, bool for_localisation, Telemetry& tel);
+  /// A localisation attempt; true when a segment was found (the switcher then starts on it).
+  bool localize(features::FrameMatcher& fm, Telemetry& tel);
+  /// This frame's verified counts against the segment's key images, for the switcher.
+  struct SegmentEvidence {
+    localization::SwitchCounts counts;
+    bool reached_final = false;  ///< arrival at the final image seen on this frame
+  };
+  SegmentEvidence associate(features::FrameMatcher& fm, Telemetry& tel);
+  /// The switcher's update, and whether the segment is overdue: facts for the table.
+  void switch_key_images(const SegmentEvidence& ev, int64_t t_ns, StepFacts& facts,
+                         Telemetry& tel);
+  /// The controller's yaw-rate demand on the current segment; nullopt: no usable feature.
+  std::optional<double> control(features::FrameMatcher& fm, Telemetry& tel);
+  /// Carries out a row of the transition table; the command for this frame.
+  Command take(const Transition& t, int64_t t_ns, std::optional<double> demand, Telemetry& tel);
   /// True when the current segment has lasted longer than segment_overdue_* allow at t_ns.
   bool segment_overdue(int64_t t_ns) const;
   /// blind_switch_min_driven_fraction: whether a switch without a scale ratio is allowed now.
