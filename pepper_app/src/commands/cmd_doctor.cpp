@@ -11,6 +11,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "session/robot_connection.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
 #include "naoqi_bridge/qi/qi_bridge.hpp"
 #include "naoqi_bridge/qi/session.hpp"
@@ -78,19 +79,19 @@ int run_doctor(const DoctorArgs& a) {
   Report report;
   qi::QiBridgeOptions o;
   o.url = a.robot;
-  o.user = a.user;
   o.tls_pin_sha256 = a.tls_pin;
   o.connect_timeout = std::chrono::milliseconds(a.timeout_ms);
   o.call_timeout = std::chrono::milliseconds(a.timeout_ms);
   o.subscriber_name = "pepper_doctor";
-  if (!a.user.empty()) {
-    if (!a.password_file.empty()) {
-      o.password = qi::read_password_file(a.password_file);
-    } else if (auto env = qi::read_password_env("PEPPER_PASSWORD")) {
-      o.password = *env;
-    } else {
-      o.password = qi::prompt_password("Password for " + a.user + "@" + a.robot + ": ");
-    }
+  try {
+    // tcps:// logs in as "nao" unless --user says otherwise (the same rule as teach and replay).
+    const RobotLogin login = robot_login(a.robot.rfind("tcps://", 0) == 0, a.user,
+                                         a.password_file, /*allow_prompt=*/true, a.robot);
+    o.user = login.user;
+    o.password = login.password;
+  } catch (const std::exception& e) {
+    std::cerr << "pepper_app doctor: " << e.what() << "\n";
+    return 2;
   }
   const auto errors = o.validate();
   if (!errors.empty()) {
@@ -247,7 +248,8 @@ void register_doctor_command(CLI::App& app) {
   cmd->add_option("--robot", args->robot, "Robot URL: tcp://HOST:9559 or tcps://HOST:9503")
       ->required();
   cmd->add_option("--user", args->user,
-                  "Login user (NAOqi 2.9: nao); the password comes from "
+                  "Login user (default for tcps://: nao, Pepper's user on NAOqi 2.9); the "
+                  "password comes from "
                   "--password-file, PEPPER_PASSWORD or a prompt");
   cmd->add_option("--password-file", args->password_file, "File whose first line is the password");
   cmd->add_option("--tls-pin", args->tls_pin,

@@ -54,6 +54,25 @@ RobotConnection open_mock_robot(std::shared_ptr<const mock::World> world,
   return c;
 }
 
+RobotLogin robot_login(bool tls, const std::string& user, const std::string& password_file,
+                       bool allow_prompt, const std::string& url) {
+  RobotLogin login;
+  login.user = user.empty() && tls ? "nao" : user;
+  if (login.user.empty()) return login;
+  if (!password_file.empty()) {
+    login.password = qi::read_password_file(password_file);
+  } else if (auto env = qi::read_password_env("PEPPER_PASSWORD")) {
+    login.password = *env;
+  } else if (allow_prompt && ::isatty(STDIN_FILENO) != 0) {
+    login.password = qi::prompt_password("Password for '" + login.user + "' on " + url + ": ");
+  } else {
+    throw naoqi_bridge::BridgeError(
+        "no password for user '" + login.user +
+        "': give --password-file FILE or set PEPPER_PASSWORD (no terminal to prompt on)");
+  }
+  return login;
+}
+
 RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options) {
   const RobotUrl parsed = parse_robot_url(url);
   if (parsed.kind == RobotUrl::Kind::kMock) {
@@ -70,22 +89,12 @@ RobotConnection open_robot(const std::string& url, const RobotConnectOptions& op
   c.url = parsed;
   qi::QiBridgeOptions qo;
   qo.url = c.url.url;
-  qo.user = options.user;
+  const RobotLogin login = robot_login(c.url.kind == RobotUrl::Kind::kTcps, options.user,
+                                       options.password_file, options.allow_prompt, qo.url);
+  qo.user = login.user;
+  qo.password = login.password;
   qo.watchdog_timeout = std::chrono::milliseconds(options.watchdog_ms);
   qo.frame_stall_timeout = std::chrono::milliseconds(options.frame_stall_ms);
-  if (!options.user.empty()) {
-    if (!options.password_file.empty()) {
-      qo.password = qi::read_password_file(options.password_file);
-    } else if (auto env = qi::read_password_env("PEPPER_PASSWORD")) {
-      qo.password = *env;
-    } else if (options.allow_prompt && ::isatty(STDIN_FILENO) != 0) {
-      qo.password = qi::prompt_password("Password for '" + options.user + "' on " + qo.url + ": ");
-    } else {
-      throw naoqi_bridge::BridgeError(
-          "no password for user '" + options.user +
-          "': give --password-file FILE or set PEPPER_PASSWORD (no terminal to prompt on)");
-    }
-  }
   const auto problems = qo.validate();
   if (!problems.empty()) {
     std::string all;

@@ -57,6 +57,17 @@ RobotConnection open_mock_robot(std::shared_ptr<const naoqi_bridge::mock::World>
                                 const naoqi_bridge::mock::MockRobotOptions& robot_options,
                                 naoqi_bridge::mock::MockBridgeOptions bridge_options);
 
+/// The login for a robot: none for tcp:// without a user; for tcps:// (NAOqi 2.9) the user
+/// defaults to "nao" (Pepper's user). The password comes from `password_file`, else the
+/// PEPPER_PASSWORD environment variable, else a prompt without echo (when `allow_prompt` and
+/// standard input is a terminal). Throws naoqi_bridge::BridgeError when none is available.
+struct RobotLogin {
+  std::string user;      ///< empty: no login
+  std::string password;
+};
+RobotLogin robot_login(bool tls, const std::string& user, const std::string& password_file,
+                       bool allow_prompt, const std::string& url);
+
 /// Builds the bridge for `url` (does not connect).
 RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options);
 

@@ -3,6 +3,7 @@
 // The core is replaced by a scripted step function where a fault must be injected.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -367,6 +368,24 @@ TEST(RobotUrl, ParsesAndNormalises) {
   EXPECT_EQ(parse_robot_url("mock:w.yaml").world_file, "w.yaml");
   EXPECT_THROW(parse_robot_url("http://x"), std::invalid_argument);
   EXPECT_THROW(parse_robot_url("mock:"), std::invalid_argument);
+}
+
+// tcps:// logs in as Pepper's user "nao" unless told otherwise, with the password from
+// PEPPER_PASSWORD when no file is given (issue 23: doctor read it only with --user, and then
+// logged in with an empty user); tcp:// without a user does not log in.
+TEST(RobotLogin, TlsDefaultsToNaoAndReadsTheEnvironment) {
+  ::setenv("PEPPER_PASSWORD", "from-env", 1);
+  const RobotLogin tls = robot_login(true, "", "", false, "tcps://10.0.0.5:9503");
+  EXPECT_EQ(tls.user, "nao");
+  EXPECT_EQ(tls.password, "from-env");
+  const RobotLogin other = robot_login(true, "admin", "", false, "tcps://10.0.0.5:9503");
+  EXPECT_EQ(other.user, "admin");
+  const RobotLogin plain = robot_login(false, "", "", false, "tcp://10.0.0.5:9559");
+  EXPECT_TRUE(plain.user.empty());
+  EXPECT_TRUE(plain.password.empty());
+  ::unsetenv("PEPPER_PASSWORD");
+  // No password anywhere and no terminal: a clear error, never an empty password.
+  EXPECT_THROW(robot_login(true, "", "", false, "tcps://10.0.0.5:9503"), naoqi_bridge::BridgeError);
 }
 
 }  // namespace
