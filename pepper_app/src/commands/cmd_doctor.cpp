@@ -264,7 +264,7 @@ void register_doctor_command(CLI::App& app) {
   cmd->footer(
       "Examples:\n"
       "  pepper_app doctor --robot tcp://10.0.0.5:9559\n"
-      "  pepper_app doctor --robot tcps://10.0.0.5:9503 --user nao --password-file ~/.pepper_pw");
+      "  pepper_app doctor --robot tcps://10.0.0.5:9503 --password-file ~/.pepper_pw  # user nao");
   cmd->callback([args] {
     try {
       exit_code() = run_doctor(*args);

@@ -109,7 +109,7 @@ void register_map_command(CLI::App& app) {
       "  pepper_app map build --recording rec/lab_tour --map maps/lab_tour\n"
       "  pepper_app map build --recording rec/lab_tour --map maps/eps60 --set key_images.epsilon=60\n"
       "  pepper_app map build --recording ../shared/data/pepper_qut_tmap/Edge_01 \\\n"
-      "      --camera pepper_qvga.yaml --every-frame-key --map maps/edge01");
+      "      --camera cameras/pepper_top_qvga.yaml --every-frame-key --map maps/edge01");
   build->callback([build_args] { exit_code() = run_map_build(*build_args); });
 }
 

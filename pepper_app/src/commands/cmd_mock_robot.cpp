@@ -149,7 +149,7 @@ void register_mock_robot_command(CLI::App& app) {
   cmd->footer(
       "Examples:\n"
       "  pepper_app mock-robot --listen tcp://127.0.0.1:9559\n"
-      "  pepper_app mock-robot --listen tcp://127.0.0.1:9559 --world worlds/corridor/world.yaml\n"
+      "  pepper_app mock-robot --listen tcp://127.0.0.1:9559 --world worlds/white_corridor.yaml\n"
       "  PEPPER_PASSWORD=pepper pepper_app mock-robot --listen tcps://127.0.0.1:9503 --user nao");
   cmd->callback([args] {
     try {
