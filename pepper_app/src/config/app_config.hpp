@@ -1,7 +1,7 @@
 #pragma once
-// The application's configuration: every parameter of every concern, with the paper's defaults
+// The application's configuration: every parameter of every concern, with the measured defaults
 // (the core options structs' in-class defaults), loadable from YAML/JSON and overridable on the
-// command line with dotted names: `--set navigator.ibvs.g1=0.6 --set robot.fps=10`.
+// command line with dotted names: `--set navigator.ibvs.g1=0.6 --set robot.camera_fps=10`.
 //
 // File layout (sections = concerns; `pepper_app config dump` prints the full default file):
 //   features:   extractor (lines, LBD, FAST, ORB, KLT) and matcher (line matching, RANSACs)
@@ -11,8 +11,10 @@
 //   robot:      camera request, head lock, safety timeouts, login user
 //   replay:     when a replay that cannot go on gives up
 //   ui:         teach UI port and driving limits
-// Unknown keys and wrong types are errors naming the dotted key and the file; values are then
-// checked by the core's validate() functions before anything moves (STYLE.md 2.5).
+// Every key, type, unit and range is declared once, in config/parameters.cpp. Unknown keys and
+// wrong types are errors naming the dotted key and the file (with the closest known key); the
+// ranges are checked from that table, then the core's validate() functions check the rules
+// between fields, before anything moves (STYLE.md 2.5).
 
 #include <filesystem>
 #include <string>
@@ -39,6 +41,7 @@ struct RobotConfig {
   int watchdog_ms = 300;         ///< bridge stops the base without a fresh command this long
   int frame_timeout_ms = 1000;   ///< session stops the base when no frame comes this long
   std::string user;              ///< login user for tcps:// (NAOqi 2.9: "nao"); password never here
+  /// The rule between fields (640x480 or 320x240); each field's range is in the table.
   std::vector<std::string> validate() const;
 };
 
@@ -49,14 +52,12 @@ struct ReplayConfig {
   /// Not localised this long after the first frame: the replay ends as "not_localised" with the
   /// best candidate key image and advice. 0 = wait until the operator stops it.
   double give_up_not_localised_s = 10.0;
-  std::vector<std::string> validate() const;
 };
 
 struct UiConfig {
   int port = 8080;               ///< 0 = any free port
   double max_v_m_s = 0.25;       ///< teach driving limits from the keyboard / buttons
   double max_omega_rad_s = 0.5;
-  std::vector<std::string> validate() const;
 };
 
 struct AppConfig {
@@ -71,7 +72,9 @@ struct AppConfig {
   core::mapping::TeachOptions teach_options() const;
   core::navigator::NavigatorOptions navigator_options() const;
 
-  /// Every problem, each naming the dotted key; empty when valid.
+  /// Every problem, each naming the dotted key; empty when valid. The ranges of the parameter
+  /// table first (check_ranges); only when they hold, the rules between fields of the core's
+  /// and RobotConfig's validate() (their per-field messages would repeat the table's).
   std::vector<std::string> validate() const;
 };
 
