@@ -190,10 +190,33 @@ json parse_override(const std::string& assignment) {
   return patch;
 }
 
-AppConfig load_app_config(const std::filesystem::path& file, const std::vector<std::string>& sets) {
+AppConfig load_app_config(const ConfigSources& sources) {
+  json file_tree;
+  if (!sources.file.empty()) file_tree = read_config_file(sources.file);
+  std::string preset_name = sources.preset;
+  std::string preset_origin = "--preset " + preset_name;
+  if (file_tree.is_object() && file_tree.contains("preset")) {
+    if (!file_tree["preset"].is_string()) {
+      fail(sources.file, "preset", "must be a preset name, got " + file_tree["preset"].dump());
+    }
+    if (preset_name.empty()) {
+      preset_name = file_tree["preset"].get<std::string>();
+      preset_origin = sources.file + ": preset " + preset_name;
+    }
+    file_tree.erase("preset");
+  }
   AppConfig config;
-  if (!file.empty()) apply_config_json(read_config_file(file), config, file.string());
-  apply_config_json(overrides_tree(sets), config, "--set");
+  if (!preset_name.empty()) {
+    const Preset* preset = find_preset(preset_name);
+    if (preset == nullptr) {
+      std::string known;
+      for (const auto& p : presets()) known += (known.empty() ? "" : ", ") + p.name;
+      throw ConfigError(preset_origin + ": unknown preset (known: " + known + ")");
+    }
+    apply_config_json(overrides_tree(preset->sets), config, "preset " + preset->name);
+  }
+  apply_config_json(file_tree, config, sources.file);
+  apply_config_json(overrides_tree(sources.sets), config, "--set");
   const auto errors = config.validate();
   if (!errors.empty()) {
     std::string msg = "invalid configuration:";
@@ -201,6 +224,10 @@ AppConfig load_app_config(const std::filesystem::path& file, const std::vector<s
     throw ConfigError(msg);
   }
   return config;
+}
+
+AppConfig load_app_config(const std::filesystem::path& file, const std::vector<std::string>& sets) {
+  return load_app_config(ConfigSources{file.string(), "", sets});
 }
 
 }  // namespace pepper::app

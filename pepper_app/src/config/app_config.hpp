@@ -11,6 +11,7 @@
 //   robot:      camera request, head lock, safety timeouts, login user
 //   replay:     when a replay that cannot go on gives up
 //   ui:         teach UI port and driving limits
+// A file may also name a preset (`preset: paper`), applied before the file's own values.
 // Every key, type, unit and range is declared once, in config/parameters.cpp. Unknown keys and
 // wrong types are errors naming the dotted key and the file (with the closest known key); the
 // ranges are checked from that table, then the core's validate() functions check the rules
@@ -91,8 +92,17 @@ nlohmann::json read_config_file(const std::filesystem::path& file);
 /// Parses "dotted.key=value" (value read as a YAML scalar) into a JSON patch tree.
 nlohmann::json parse_override(const std::string& assignment);
 
-/// Defaults, then the file (if not empty), then each override in order; then validate().
-/// Throws ConfigError listing every problem.
+/// Where a command's configuration comes from (--config, --preset, --set).
+struct ConfigSources {
+  std::string file;               ///< YAML/JSON file; "" for none
+  std::string preset;             ///< preset name (parameters.hpp presets()); "" for none
+  std::vector<std::string> sets;  ///< "dotted.key=value", applied in order
+};
+
+/// Defaults, then the preset (`sources.preset`, else the file's top-level `preset:` key), then
+/// the file's values, then each override in order; then validate(). Throws ConfigError listing
+/// every problem.
+AppConfig load_app_config(const ConfigSources& sources);
 AppConfig load_app_config(const std::filesystem::path& file, const std::vector<std::string>& sets);
 
 }  // namespace pepper::app

@@ -968,4 +968,25 @@ std::vector<std::string> check_ranges(const AppConfig& config) {
   return errors;
 }
 
+const std::vector<Preset>& presets() {
+  static const std::vector<Preset> list = {
+      {"default",
+       "The measured defaults: the VNHV controller with the paper's gains and speeds, the "
+       "configuration behind the README's closed-loop figures.",
+       {}},
+      {"paper",
+       "The paper's settings: its IBVS law alone (g1 0.7, g2 0.3, lambda 1, 0.15 / 0.08 m/s; "
+       "those are the defaults) instead of VNHV.",
+       {"navigator.controller=ibvs"}},
+  };
+  return list;
+}
+
+const Preset* find_preset(std::string_view name) {
+  for (const auto& p : presets()) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
 }  // namespace pepper::app

@@ -106,4 +106,17 @@ const std::vector<std::pair<std::string, std::string>>& section_docs();
 /// "navigator.vnhv.kp_1_m2 = -1: must be in (0, inf) (1/m^2)"; empty when all are in range.
 std::vector<std::string> check_ranges(const AppConfig& config);
 
+/// A named set of values that travel together (OpenCV's presets), applied over the defaults
+/// before the configuration file and --set.
+struct Preset {
+  std::string name;
+  std::string doc;
+  std::vector<std::string> sets;  ///< "dotted.key=value", as --set
+};
+
+const std::vector<Preset>& presets();
+
+/// The preset called `name`, or nullptr.
+const Preset* find_preset(std::string_view name);
+
 }  // namespace pepper::app

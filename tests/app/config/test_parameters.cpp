@@ -1,5 +1,5 @@
 // The parameter table (pepper_app/src/config/parameters.cpp) and what is generated from it: range
-// checks, the reader's messages, dump / load.
+// checks, the reader's messages, dump / load, presets.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -19,23 +19,25 @@ namespace {
 
 using nlohmann::json;
 
-std::string config_error(const std::string& file, const std::vector<std::string>& sets) {
+std::string config_error(const ConfigSources& sources) {
   try {
-    load_app_config(file, sets);
+    load_app_config(sources);
   } catch (const ConfigError& e) {
     return e.what();
   }
   return "(no error)";
 }
 
-std::string set_error(const std::string& assignment) { return config_error("", {assignment}); }
+std::string set_error(const std::string& assignment) {
+  return config_error(ConfigSources{"", "", {assignment}});
+}
 
 /// The error of loading a file called `name` holding `text`.
 std::string file_error(const std::string& name, const std::string& text) {
   test::TempDir tmp;
   const auto file = tmp.path() / name;
   std::ofstream(file) << text;
-  return config_error(file.string(), {});
+  return config_error(ConfigSources{file.string(), "", {}});
 }
 
 double no_reference(const std::string&) { return 0.0; }
@@ -128,7 +130,7 @@ TEST(ConfigParameters, RulesBetweenFieldsStillComeFromTheValidateFunctions) {
             std::string::npos);
   EXPECT_NE(set_error("robot.camera_width_px=320").find("must be 640x480 (kVGA) or 320x240"),
             std::string::npos);
-  const std::string gains = config_error("", {"navigator.ibvs.g1=0", "navigator.ibvs.g2=0"});
+  const std::string gains = config_error({"", "", {"navigator.ibvs.g1=0", "navigator.ibvs.g2=0"}});
   EXPECT_NE(gains.find("g1 + g2 must be > 0"), std::string::npos) << gains;
 }
 
@@ -213,6 +215,37 @@ TEST(ConfigParameters, DumpWritesExactlyTheTableAndEveryRowRoundTrips) {
     apply_config_json(read_config_file(file), back, file.string());
     EXPECT_EQ(p.get(back), value) << p.key;
     EXPECT_EQ(config_to_json(back), config_to_json(c)) << p.key;
+  }
+}
+
+TEST(ConfigParameters, PresetsApply) {
+  using core::navigator::ControllerKind;
+  EXPECT_EQ(load_app_config(ConfigSources{"", "paper", {}}).navigator.controller,
+            ControllerKind::kIbvs);
+  EXPECT_EQ(load_app_config(ConfigSources{"", "default", {}}).navigator.controller,
+            ControllerKind::kVnhv);
+  EXPECT_EQ(config_to_json(load_app_config(ConfigSources{"", "default", {}})),
+            config_to_json(AppConfig{}));
+  // --set applies after the preset.
+  EXPECT_EQ(load_app_config(ConfigSources{"", "paper", {"navigator.controller=vnhv"}})
+                .navigator.controller,
+            ControllerKind::kVnhv);
+
+  test::TempDir tmp;
+  const auto file = tmp.path() / "p.yaml";
+  std::ofstream(file) << "preset: paper\nrobot:\n  camera_fps: 10\n";
+  const AppConfig from_file = load_app_config(ConfigSources{file.string(), "", {}});
+  EXPECT_EQ(from_file.navigator.controller, ControllerKind::kIbvs);
+  EXPECT_EQ(from_file.robot.camera_fps, 10);
+  // --preset wins over the file's preset: key.
+  EXPECT_EQ(load_app_config(ConfigSources{file.string(), "default", {}}).navigator.controller,
+            ControllerKind::kVnhv);
+
+  EXPECT_NE(
+      config_error({"", "fast", {}}).find("--preset fast: unknown preset (known: default, paper)"),
+      std::string::npos);
+  for (const Preset& p : presets()) {
+    EXPECT_NO_THROW(load_app_config(ConfigSources{"", p.name, {}})) << p.name;
   }
 }
 
