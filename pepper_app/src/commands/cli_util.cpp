@@ -43,10 +43,12 @@ void add_config_options(CLI::App* cmd, std::string& file, std::string& preset,
     listed += (listed.empty() ? "" : ", ") + p.name;
   }
   cmd->add_option("--config", file,
-                  "Configuration file (YAML/JSON; `pepper_app config dump` writes a complete one)")
+                  "Configuration file (YAML/JSON; `pepper_app config dump` writes a complete one, "
+                  "docs/configuration.md lists every key)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--preset", preset, "Named settings applied before --config and --set: " + listed)
-      ->check(CLI::IsMember(names));
+  const std::string preset_help =
+      "Named settings applied before --config and --set: " + listed + " (docs/configuration.md)";
+  cmd->add_option("--preset", preset, preset_help)->check(CLI::IsMember(names));
   cmd->add_option(
       "--set", sets,
       "Override one parameter: dotted.key=value (repeatable), e.g. --set " + set_example);

@@ -1,11 +1,13 @@
 // `pepper_app config dump [--config F] [--preset NAME] [--set K=V]...`: print the effective
-// configuration as YAML.
+// configuration as YAML. `pepper_app config doc`: print the Markdown reference of every parameter
+// (docs/configuration.md).
 #include <iostream>
 #include <memory>
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
 #include "config/app_config.hpp"
+#include "config/config_doc.hpp"
 #include "config/config_yaml.hpp"
 
 namespace pepper::app {
@@ -31,6 +33,15 @@ void register_config_command(CLI::App& app) {
     } catch (const std::exception& e) {
       exit_code() = report_error(e.what());
     }
+  });
+  auto* doc = cmd->add_subcommand(
+      "doc",
+      "Print the Markdown reference of every parameter (key, type, default, unit, range, doc)\n"
+      "and of the presets, generated from the parameter table: docs/configuration.md.");
+  doc->footer("Example:\n  pepper_app config doc > docs/configuration.md");
+  doc->callback([] {
+    std::cout << configuration_markdown();
+    exit_code() = 0;
   });
 }
 

@@ -3,7 +3,8 @@
 // (the core options structs' in-class defaults), loadable from YAML/JSON and overridable on the
 // command line with dotted names: `--set navigator.ibvs.g1=0.6 --set robot.camera_fps=10`.
 //
-// File layout (sections = concerns; `pepper_app config dump` prints the full default file):
+// File layout (sections = concerns; `pepper_app config dump` prints the full default file,
+// docs/configuration.md lists every key with its default, unit, range and meaning):
 //   features:   extractor (lines, LBD, FAST, ORB, KLT) and matcher (line matching, RANSACs)
 //               — shared by teach and replay, since a map's descriptors must match replay's.
 //   key_images: teach key-image selection (epsilon rule)

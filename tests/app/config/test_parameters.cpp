@@ -1,5 +1,5 @@
 // The parameter table (pepper_app/src/config/parameters.cpp) and what is generated from it: range
-// checks, the reader's messages, dump / load, presets.
+// checks, the reader's messages, dump / load, presets and docs/configuration.md.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -10,6 +10,7 @@
 #include <string>
 
 #include "config/app_config.hpp"
+#include "config/config_doc.hpp"
 #include "config/config_yaml.hpp"
 #include "config/parameters.hpp"
 #include "support/temp_dir.hpp"
@@ -247,6 +248,27 @@ TEST(ConfigParameters, PresetsApply) {
   for (const Preset& p : presets()) {
     EXPECT_NO_THROW(load_app_config(ConfigSources{"", p.name, {}})) << p.name;
   }
+}
+
+TEST(ConfigDoc, CommittedReferenceIsCurrent) {
+  std::ifstream in(std::string(PEPPER_SOURCE_DIR) + "/docs/configuration.md");
+  ASSERT_TRUE(in) << "docs/configuration.md missing";
+  std::stringstream committed;
+  committed << in.rdbuf();
+  EXPECT_TRUE(committed.str() == configuration_markdown())
+      << "docs/configuration.md differs from the parameter table; regenerate it with\n"
+         "  build/pepper_app/pepper_app config doc > docs/configuration.md";
+}
+
+TEST(ConfigDoc, ListsEveryKeyWithItsDefaultAndEveryPreset) {
+  const std::string md = configuration_markdown();
+  for (const Parameter& p : parameters()) {
+    EXPECT_NE(md.find("| `" + p.key + "` |"), std::string::npos) << p.key;
+  }
+  EXPECT_NE(md.find("| `navigator.controller` | enum | `vnhv` |"), std::string::npos);
+  EXPECT_NE(md.find("| `navigator.vnhv.kp_1_m2` | double | `9` | 1/m^2 | `(0, inf)` |"),
+            std::string::npos);
+  for (const Preset& p : presets()) EXPECT_NE(md.find("| `" + p.name + "` |"), std::string::npos);
 }
 
 }  // namespace
