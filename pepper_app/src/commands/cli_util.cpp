@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "config/parameters.hpp"
 #include "core/camera/intrinsics_io.hpp"
 
 namespace pepper::app {
@@ -31,6 +32,26 @@ std::optional<core::CameraIntrinsics> load_camera_option(const std::string& path
 int report_error(const std::string& what) {
   std::cerr << "pepper_app: error: " << what << "\n";
   return 1;
+}
+
+void add_config_options(CLI::App* cmd, std::string& file, std::string& preset,
+                        std::vector<std::string>& sets, const std::string& set_example) {
+  std::vector<std::string> names;
+  std::string listed;
+  for (const auto& p : presets()) {
+    names.push_back(p.name);
+    listed += (listed.empty() ? "" : ", ") + p.name;
+  }
+  cmd->add_option("--config", file,
+                  "Configuration file (YAML/JSON; `pepper_app config dump` writes a complete one, "
+                  "docs/configuration.md lists every key)")
+      ->check(CLI::ExistingFile);
+  const std::string preset_help =
+      "Named settings applied before --config and --set: " + listed + " (docs/configuration.md)";
+  cmd->add_option("--preset", preset, preset_help)->check(CLI::IsMember(names));
+  cmd->add_option(
+      "--set", sets,
+      "Override one parameter: dotted.key=value (repeatable), e.g. --set " + set_example);
 }
 
 }  // namespace pepper::app

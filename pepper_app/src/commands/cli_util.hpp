@@ -1,10 +1,14 @@
 #pragma once
-// Small helpers shared by the command files: progress lines, camera files, error reporting.
+// Small helpers shared by the command files: progress lines, camera files, error reporting, the
+// configuration options.
 
 #include <chrono>
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "core/camera/intrinsics.hpp"
 
@@ -25,6 +29,12 @@ class ProgressLine {
 
 /// Loads --camera FILE (.xml ViSP, .yaml/.yml/.json plain) when non-empty.
 std::optional<core::CameraIntrinsics> load_camera_option(const std::string& path);
+
+/// Adds --config FILE, --preset NAME and --set dotted.key=value (repeatable) to `cmd`, filling
+/// `file`, `preset` and `sets` (load_app_config's ConfigSources). `set_example` is a key=value
+/// shown in the help.
+void add_config_options(CLI::App* cmd, std::string& file, std::string& preset,
+                        std::vector<std::string>& sets, const std::string& set_example);
 
 /// Prints "pepper_app: error: <what>" to stderr and returns exit code 1.
 int report_error(const std::string& what);

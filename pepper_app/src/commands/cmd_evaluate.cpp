@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
 #include "config/app_config.hpp"
 #include "evaluation/closed_loop.hpp"
@@ -44,8 +45,7 @@ struct EvaluateArgs {
   double converged_below_m = 0.05;
   double end_tolerance_m = 0.3;
   bool quiet = false;
-  std::string config_file;
-  std::vector<std::string> sets;
+  ConfigSources config;
   std::string trace_dir;
   std::vector<int> only_runs;
   std::string command_line;
@@ -93,9 +93,9 @@ int run_evaluate(const EvaluateArgs& a) {
   }
   try {
     // --controller is a shorthand for --set navigator.controller=... (applied last).
-    std::vector<std::string> sets = a.sets;
-    if (!a.controller.empty()) sets.push_back("navigator.controller=" + a.controller);
-    const AppConfig config = load_app_config(a.config_file, sets);
+    ConfigSources sources = a.config;
+    if (!a.controller.empty()) sources.sets.push_back("navigator.controller=" + a.controller);
+    const AppConfig config = load_app_config(sources);
     o.navigator = config.navigator_options();
     o.key_images = config.teach_options().selector;
     o.head.head_yaw_rad = config.robot.head_yaw_rad;
@@ -182,11 +182,8 @@ void register_evaluate_command(CLI::App& app) {
       "smoothness and per-frame time (docs/evaluation.md). Exit code 1 when a run fails.");
   auto args = std::make_shared<EvaluateArgs>();
   cmd->add_option("--world", args->worlds, "World YAML file(s) (worlds/*.yaml)")->required();
-  cmd->add_option("--config", args->config_file,
-                  "Configuration file (YAML/JSON): key-image selection, perception and navigator "
-                  "parameters (`pepper_app config dump` shows them all)");
-  cmd->add_option("--set", args->sets,
-                  "Override one parameter, e.g. --set key_images.relative=0.5 (repeatable)");
+  add_config_options(cmd, args->config.file, args->config.preset, args->config.sets,
+                     "key_images.relative=0.5");
   cmd->add_option("--trace", args->trace_dir,
                   "Write one JSON-lines trace per run here (ground truth, command, telemetry per "
                   "frame) to diagnose a failed run");

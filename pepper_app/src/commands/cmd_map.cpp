@@ -22,8 +22,7 @@ struct MapBuildArgs {
   std::string camera;
   bool every_frame_key = false;
   double fps = 15.0;
-  std::string config_file;
-  std::vector<std::string> sets;
+  ConfigSources config;
   std::string steps_csv;
 };
 
@@ -43,7 +42,7 @@ int run_map_info(const MapInfoArgs& a) {
 
 int run_map_build(const MapBuildArgs& a) {
   try {
-    const AppConfig config = load_app_config(a.config_file, a.sets);
+    const AppConfig config = load_app_config(a.config);
     const auto camera = load_camera_option(a.camera);
     const Recording rec = read_recording(a.recording, camera, a.fps);
     for (const auto& w : rec.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
@@ -98,9 +97,8 @@ void register_map_command(CLI::App& app) {
                   "Take every image as a key image (maps made elsewhere)");
   build->add_option("--fps", build_args->fps, "Nominal frame rate of a plain image folder")
       ->check(CLI::PositiveNumber);
-  build->add_option("--config", build_args->config_file, "Configuration file (YAML/JSON)");
-  build->add_option("--set", build_args->sets,
-                    "Override one parameter, e.g. --set key_images.epsilon=60 (repeatable)");
+  add_config_options(build, build_args->config.file, build_args->config.preset,
+                     build_args->config.sets, "key_images.epsilon=60");
   build->add_option("--steps-csv", build_args->steps_csv,
                     "Write the per-frame counts of the teach rule (nL, nP, threshold, key images) "
                     "as CSV");

@@ -20,13 +20,12 @@ struct ReplayLogArgs {
   std::string json_out;
   double fps = 15.0;
   bool quiet = false;
-  std::string config_file;
-  std::vector<std::string> sets;
+  ConfigSources config;
 };
 
 int run_replay_log(const ReplayLogArgs& a) {
   try {
-    const AppConfig config = load_app_config(a.config_file, a.sets);
+    const AppConfig config = load_app_config(a.config);
     core::memory::VisualMemory map = core::memory::load_map(a.map);
     const auto camera = load_camera_option(a.camera);
     const Recording rec = read_recording(a.recording, camera ? camera : map.camera, a.fps);
@@ -81,9 +80,8 @@ void register_replay_log_command(CLI::App& app) {
   cmd->add_option("--fps", args->fps, "Nominal frame rate of a plain image folder")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("-q,--quiet", args->quiet, "Print the summary only");
-  cmd->add_option("--config", args->config_file, "Configuration file (YAML/JSON)");
-  cmd->add_option("--set", args->sets,
-                  "Override one parameter, e.g. --set navigator.features=lines (repeatable)");
+  add_config_options(cmd, args->config.file, args->config.preset, args->config.sets,
+                     "navigator.features=lines");
   cmd->footer("Example:\n  pepper_app replay-log --recording rec/replay1 --map maps/lab_tour "
               "--json replay1.json");
   cmd->callback([args] { exit_code() = run_replay_log(*args); });

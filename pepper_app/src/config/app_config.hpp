@@ -1,9 +1,10 @@
 #pragma once
-// The application's configuration: every parameter of every concern, with the paper's defaults
+// The application's configuration: every parameter of every concern, with the measured defaults
 // (the core options structs' in-class defaults), loadable from YAML/JSON and overridable on the
-// command line with dotted names: `--set navigator.ibvs.g1=0.6 --set robot.fps=10`.
+// command line with dotted names: `--set navigator.ibvs.g1=0.6 --set robot.camera_fps=10`.
 //
-// File layout (sections = concerns; `pepper_app config dump` prints the full default file):
+// File layout (sections = concerns; `pepper_app config dump` prints the full default file,
+// docs/configuration.md lists every key with its default, unit, range and meaning):
 //   features:   extractor (lines, LBD, FAST, ORB, KLT) and matcher (line matching, RANSACs)
 //               — shared by teach and replay, since a map's descriptors must match replay's.
 //   key_images: teach key-image selection (epsilon rule)
@@ -11,8 +12,11 @@
 //   robot:      camera request, head lock, safety timeouts, login user
 //   replay:     when a replay that cannot go on gives up
 //   ui:         teach UI port and driving limits
-// Unknown keys and wrong types are errors naming the dotted key and the file; values are then
-// checked by the core's validate() functions before anything moves (STYLE.md 2.5).
+// A file may also name a preset (`preset: paper`), applied before the file's own values.
+// Every key, type, unit and range is declared once, in config/parameters.cpp. Unknown keys and
+// wrong types are errors naming the dotted key and the file (with the closest known key); the
+// ranges are checked from that table, then the core's validate() functions check the rules
+// between fields, before anything moves (STYLE.md 2.5).
 
 #include <filesystem>
 #include <string>
@@ -39,6 +43,7 @@ struct RobotConfig {
   int watchdog_ms = 300;         ///< bridge stops the base without a fresh command this long
   int frame_timeout_ms = 1000;   ///< session stops the base when no frame comes this long
   std::string user;              ///< login user for tcps:// (NAOqi 2.9: "nao"); password never here
+  /// The rule between fields (640x480 or 320x240); each field's range is in the table.
   std::vector<std::string> validate() const;
 };
 
@@ -49,14 +54,12 @@ struct ReplayConfig {
   /// Not localised this long after the first frame: the replay ends as "not_localised" with the
   /// best candidate key image and advice. 0 = wait until the operator stops it.
   double give_up_not_localised_s = 10.0;
-  std::vector<std::string> validate() const;
 };
 
 struct UiConfig {
   int port = 8080;               ///< 0 = any free port
   double max_v_m_s = 0.25;       ///< teach driving limits from the keyboard / buttons
   double max_omega_rad_s = 0.5;
-  std::vector<std::string> validate() const;
 };
 
 struct AppConfig {
@@ -71,7 +74,9 @@ struct AppConfig {
   core::mapping::TeachOptions teach_options() const;
   core::navigator::NavigatorOptions navigator_options() const;
 
-  /// Every problem, each naming the dotted key; empty when valid.
+  /// Every problem, each naming the dotted key; empty when valid. The ranges of the parameter
+  /// table first (check_ranges); only when they hold, the rules between fields of the core's
+  /// and RobotConfig's validate() (their per-field messages would repeat the table's).
   std::vector<std::string> validate() const;
 };
 
@@ -88,8 +93,17 @@ nlohmann::json read_config_file(const std::filesystem::path& file);
 /// Parses "dotted.key=value" (value read as a YAML scalar) into a JSON patch tree.
 nlohmann::json parse_override(const std::string& assignment);
 
-/// Defaults, then the file (if not empty), then each override in order; then validate().
-/// Throws ConfigError listing every problem.
+/// Where a command's configuration comes from (--config, --preset, --set).
+struct ConfigSources {
+  std::string file;               ///< YAML/JSON file; "" for none
+  std::string preset;             ///< preset name (parameters.hpp presets()); "" for none
+  std::vector<std::string> sets;  ///< "dotted.key=value", applied in order
+};
+
+/// Defaults, then the preset (`sources.preset`, else the file's top-level `preset:` key), then
+/// the file's values, then each override in order; then validate(). Throws ConfigError listing
+/// every problem.
+AppConfig load_app_config(const ConfigSources& sources);
 AppConfig load_app_config(const std::filesystem::path& file, const std::vector<std::string>& sets);
 
 }  // namespace pepper::app

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "commands/cli_util.hpp"
 #include "teach_ui/ui_server.hpp"
 
 namespace pepper::app {
@@ -18,16 +19,14 @@ void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool wit
                     "File whose first line is the password (else $PEPPER_PASSWORD, else a prompt)")
         ->check(CLI::ExistingFile);
   }
-  cmd->add_option("--config", args.config_file, "Configuration file (YAML/JSON; see `config dump`)")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--set", args.sets, "Override one parameter: dotted.key=value (repeatable)");
+  add_config_options(cmd, args.config_file, args.preset, args.sets, "robot.camera_fps=10");
   cmd->add_flag("--ui", args.ui, "Serve the teach UI on 127.0.0.1 (port: ui.port)");
   cmd->add_option("--ui-port", args.ui_port, "Serve the teach UI on this port (0 = any free port)")
       ->check(CLI::Range(0, 65535));
 }
 
 AppConfig load_session_config(const CommonSessionArgs& args) {
-  return load_app_config(args.config_file, args.sets);
+  return load_app_config(ConfigSources{args.config_file, args.preset, args.sets});
 }
 
 RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config) {

@@ -1,8 +1,8 @@
 #pragma once
 // Command-line wiring shared by `teach`, `replay` and `demo`: the common options (--robot,
-// --config, --set, --ui, --ui-port, --user, --password-file), the effective configuration, the
-// robot connection options, the camera / head-lock requests from RobotConfig, and the teach UI
-// server (started on 127.0.0.1; its URL is printed as a JSON line on stdout,
+// --config, --preset, --set, --ui, --ui-port, --user, --password-file), the effective
+// configuration, the robot connection options, the camera / head-lock requests from RobotConfig,
+// and the teach UI server (started on 127.0.0.1; its URL is printed as a JSON line on stdout,
 // {"event":"listening","url":"http://127.0.0.1:PORT/"}, plus a human line on stderr).
 
 #include <memory>
@@ -25,6 +25,7 @@ namespace pepper::app {
 struct CommonSessionArgs {
   std::string robot;
   std::string config_file;
+  std::string preset;
   std::vector<std::string> sets;
   bool ui = false;
   int ui_port = -1;  ///< -1: config ui.port; 0: any free port
@@ -32,10 +33,12 @@ struct CommonSessionArgs {
   std::string password_file;
 };
 
-/// Adds --config, --set, --ui, --ui-port (and --robot, --user, --password-file when `with_robot`).
+/// Adds --config, --preset, --set, --ui, --ui-port (and --robot, --user, --password-file when
+/// `with_robot`).
 void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool with_robot);
 
-/// Defaults + --config file + --set overrides, validated. Throws ConfigError listing problems.
+/// Defaults + --preset + --config file + --set overrides, validated. Throws ConfigError listing
+/// problems.
 AppConfig load_session_config(const CommonSessionArgs& args);
 
 RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config);

@@ -67,7 +67,7 @@ TEST(AppConfig, UnknownKeysWrongTypesAndBadValuesNameTheKey) {
   expect_config_error(file, {}, "bad.yaml: navigator.ibvs.gg1: unknown key");
   expect_config_error({}, {"robot.camera_fps=fast"}, "robot.camera_fps: must be a whole number");
   expect_config_error({}, {"navigator.controller=pid"}, "must be one of ibvs, vnhv");
-  expect_config_error({}, {"robot.camera_fps=100"}, "robot.camera_fps must be in 1..30");
+  expect_config_error({}, {"robot.camera_fps=100"}, "robot.camera_fps = 100: must be in [1, 30]");
   expect_config_error({}, {"navigator.ibvs.g1=-1"}, "g1");
   expect_config_error({}, {"novalue"}, "expected dotted.key=value");
   expect_config_error(tmp.path() / "missing.yaml", {}, "missing.yaml: cannot open");
