@@ -12,23 +12,23 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
-#include <thread>
 #include <opencv2/core.hpp>
+#include <thread>
 #include <vector>
 
-#include "naoqi_bridge/mock/synthetic_pattern_robot.hpp"
 #include "naoqi_bridge/qi/image_remote.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
 #include "naoqi_bridge/qi/qi_bridge.hpp"
 #include "naoqi_bridge/qi/session.hpp"
+#include "sim/synthetic_pattern_robot.hpp"
 
 namespace qi = pepper::naoqi_bridge::qi;
-namespace nb = pepper::naoqi_bridge;
+namespace sim = pepper::sim;
 
 namespace {
 
 /// A SimRobot whose camera returns a fixed image (shared buffer, new timestamp each capture).
-class StaticFrameRobot : public nb::mock::SyntheticPatternRobot {
+class StaticFrameRobot : public sim::SyntheticPatternRobot {
  public:
   pepper::core::Frame capture(int width_px, int height_px) override {
     if (image_.cols != width_px || image_.rows != height_px) {

@@ -13,26 +13,26 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/renderer.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/renderer.hpp"
+#include "sim/world.hpp"
 
 namespace {
 
-namespace mock = pepper::naoqi_bridge::mock;
+namespace sim = pepper::sim;
 
 const std::vector<std::string> kWorlds = {"robotics_room", "room_corridor_room", "white_corridor",
                                           "window_corridor"};
 
-const mock::World& world(size_t i) {
-  static std::vector<std::unique_ptr<mock::World>> cache(kWorlds.size());
+const sim::World& world(size_t i) {
+  static std::vector<std::unique_ptr<sim::World>> cache(kWorlds.size());
   if (!cache[i])
-    cache[i] = std::make_unique<mock::World>(mock::load_world(
+    cache[i] = std::make_unique<sim::World>(sim::load_world(
         std::filesystem::path(PEPPER_SOURCE_DIR) / "worlds" / (kWorlds[i] + ".yaml")));
   return *cache[i];
 }
 
-std::vector<Eigen::Isometry3d> poses_along_path(const mock::World& w, int n) {
+std::vector<Eigen::Isometry3d> poses_along_path(const sim::World& w, int n) {
   const auto& p = w.scenario.waypoints_m;
   const double total = w.scenario.path_length_m();
   std::vector<Eigen::Isometry3d> out;
@@ -49,7 +49,7 @@ std::vector<Eigen::Isometry3d> poses_along_path(const mock::World& w, int n) {
     T_world_base.translation() = Eigen::Vector3d(q.x(), q.y(), 0.0);
     T_world_base.linear() =
         Eigen::AngleAxisd(std::atan2(d.y(), d.x()), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    out.push_back(T_world_base * mock::CameraMount{}.T_base_cam(0.0, 0.0));
+    out.push_back(T_world_base * sim::CameraMount{}.T_base_cam(0.0, 0.0));
   }
   return out;
 }
@@ -58,10 +58,10 @@ void BM_Render(benchmark::State& state) {
   const size_t wi = static_cast<size_t>(state.range(0));
   const int width = static_cast<int>(state.range(1));
   const int height = width * 3 / 4;
-  const mock::World& w = world(wi);
+  const sim::World& w = world(wi);
   const auto poses = poses_along_path(w, 16);
-  mock::Renderer renderer;
-  mock::ViewState view;
+  sim::Renderer renderer;
+  sim::ViewState view;
   view.intrinsics = pepper::core::CameraIntrinsics::pepper_top_vga().scaled_to(width, height);
   cv::Mat img;
   size_t k = 0;
@@ -79,8 +79,8 @@ void BM_Render(benchmark::State& state) {
 
 // Full MockRobot capture (clock, kinematics, render) at VGA while driving, for reference.
 void BM_MockRobotCaptureVga(benchmark::State& state) {
-  auto w = std::make_shared<const mock::World>(world(0));
-  mock::MockRobot robot(w);
+  auto w = std::make_shared<const sim::World>(world(0));
+  sim::MockRobot robot(w);
   robot.command_velocity({0.2, 0.0, 0.1});
   for (auto _ : state) {
     auto f = robot.capture(640, 480);

@@ -20,6 +20,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/base_velocity.hpp"
 #include "core/camera/intrinsics.hpp"
 #include "core/frame.hpp"
 
@@ -31,12 +32,8 @@ class BridgeError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Velocity of the base in the robot frame.
-struct BaseVelocity {
-  double v_x_m_s = 0.0;      ///< forward, m/s
-  double v_y_m_s = 0.0;      ///< left, m/s (our controllers keep it 0: unicycle)
-  double omega_rad_s = 0.0;  ///< yaw rate, rad/s, > 0 turns left
-};
+/// Velocity of the base in the robot frame (core/base_velocity.hpp: shared with the simulator).
+using BaseVelocity = core::BaseVelocity;
 
 /// What the app asks of the camera stream.
 struct CameraRequest {

@@ -205,7 +205,7 @@ std::string read_file(const std::string& path) {
 }  // namespace
 
 struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Impl> {
-  mock::SimRobot& robot;
+  sim::SimRobot& robot;
   MockServerOptions options;
   asio::io_context io;
   std::optional<asio::executor_work_guard<asio::io_context::executor_type>> work;
@@ -237,7 +237,7 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
   std::map<std::string, ImageRemote> last_image;  // per handle, for frame drops
   Stats stats;
 
-  Impl(mock::SimRobot& r, MockServerOptions o) : robot(r), options(std::move(o)) {
+  Impl(sim::SimRobot& r, MockServerOptions o) : robot(r), options(std::move(o)) {
     latency = options.reply_latency;
     build_services();
   }
@@ -375,7 +375,7 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                  const auto angles = floats_arg(a[1], names.size(), "ALMotion::setAngles");
                  try {
                    robot.set_joint_angles(names, angles);
-                 } catch (const BridgeError& e) {
+                 } catch (const sim::SimError& e) {
                    throw MethodFailure(std::string("ALMotion::setAngles: ") + e.what());
                  }
                  return Value();
@@ -387,7 +387,7 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                  std::vector<double> angles;
                  try {
                    angles = robot.joint_angles(names);
-                 } catch (const BridgeError& e) {
+                 } catch (const sim::SimError& e) {
                    throw MethodFailure(std::string("ALMotion::getAngles: ") + e.what());
                  }
                  std::vector<float> out(angles.begin(), angles.end());
@@ -1010,7 +1010,7 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
 
 // ---------------------------------------------------------------------------------------------
 
-MockNaoqiServer::MockNaoqiServer(mock::SimRobot& robot, MockServerOptions options)
+MockNaoqiServer::MockNaoqiServer(sim::SimRobot& robot, MockServerOptions options)
     : impl_(std::make_shared<Impl>(robot, std::move(options))) {}
 
 MockNaoqiServer::~MockNaoqiServer() { stop(); }

@@ -14,13 +14,12 @@
 #include "config/app_config.hpp"
 #include "evaluation/closed_loop.hpp"
 #include "evaluation/output.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 
 namespace pepper::app {
 
 namespace {
 
-namespace mock = pepper::naoqi_bridge::mock;
 namespace ev = pepper::app::evaluation;
 
 struct EvaluateArgs {
@@ -130,7 +129,7 @@ int run_evaluate(const EvaluateArgs& a) {
   std::vector<ev::Evaluation> results;
   std::vector<std::filesystem::path> plots;
   for (const std::string& world_file : a.worlds) {
-    auto world = std::make_shared<const mock::World>(mock::load_world(world_file));
+    auto world = std::make_shared<const sim::World>(sim::load_world(world_file));
     ev::EvaluationOptions to = o;
     if (!a.map_dir.empty()) {
       to.map_dir = std::filesystem::path(a.map_dir) / (world->name + "_" + a.size);

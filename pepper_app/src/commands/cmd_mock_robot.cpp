@@ -8,18 +8,17 @@
 #include <string>
 
 #include "commands/commands.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/synthetic_pattern_robot.hpp"
-#include "naoqi_bridge/mock/world.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
 #include "naoqi_bridge/qi/session.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/synthetic_pattern_robot.hpp"
+#include "sim/world.hpp"
 
 namespace pepper::app {
 
 namespace {
 
 namespace qi = pepper::naoqi_bridge::qi;
-namespace mock = pepper::naoqi_bridge::mock;
 
 struct MockRobotArgs {
   std::string listen = "tcp://127.0.0.1:9559";
@@ -64,18 +63,18 @@ int run_mock_robot(const MockRobotArgs& a) {
     return 2;
   }
 
-  std::unique_ptr<mock::SimRobot> robot;
+  std::unique_ptr<sim::SimRobot> robot;
   std::string what;
   if (!a.world.empty()) {
-    auto world = std::make_shared<const mock::World>(mock::load_world(a.world));
-    mock::MockRobotOptions ro;
+    auto world = std::make_shared<const sim::World>(sim::load_world(a.world));
+    sim::MockRobotOptions ro;
     ro.frame_rate_hz = a.rate_hz;
-    robot = std::make_unique<mock::MockRobot>(world, ro);
+    robot = std::make_unique<sim::MockRobot>(world, ro);
     what = "textured world " + a.world;
   } else {
-    mock::SyntheticPatternOptions ro;
+    sim::SyntheticPatternOptions ro;
     ro.frame_rate_hz = a.rate_hz;
-    robot = std::make_unique<mock::SyntheticPatternRobot>(ro);
+    robot = std::make_unique<sim::SyntheticPatternRobot>(ro);
     what = "synthetic test pattern";
   }
 

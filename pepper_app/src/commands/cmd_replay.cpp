@@ -8,11 +8,11 @@
 #include "commands/commands.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "evaluation/closed_loop.hpp"
-#include "naoqi_bridge/mock/world.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
 #include "session/taught_path.hpp"
+#include "sim/world.hpp"
 #include "teach_ui/ui_server.hpp"
 
 namespace pepper::app {

@@ -1,5 +1,5 @@
 // `pepper_app world check|render`: inspect the simulated worlds of the mock robot
-// (naoqi_bridge/mock, docs/mock_robot.md).
+// (sim/, docs/mock_robot.md).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -9,14 +9,12 @@
 #include <string>
 
 #include "commands/commands.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/world.hpp"
 
 namespace pepper::app {
 
 namespace {
-
-namespace mock = pepper::naoqi_bridge::mock;
 
 struct WorldArgs {
   std::string world;
@@ -30,7 +28,7 @@ struct WorldArgs {
   std::string out;
 };
 
-bool parse_pose(const std::string& s, mock::Pose2D& pose) {
+bool parse_pose(const std::string& s, sim::Pose2D& pose) {
   double x, y, yaw_deg;
   char c1, c2;
   std::istringstream is(s);
@@ -44,8 +42,8 @@ bool parse_size(const std::string& s, int& w, int& h) {
 }
 
 int run_check(const WorldArgs& a) {
-  const mock::World w = mock::load_world(a.world);
-  std::cout << mock::summary(w);
+  const sim::World w = sim::load_world(a.world);
+  std::cout << sim::summary(w);
   std::cout << "OK\n";
   return 0;
 }
@@ -56,17 +54,17 @@ int run_render(const WorldArgs& a) {
     std::cerr << "pepper_app world render: --size must be WIDTHxHEIGHT, got '" << a.size << "'\n";
     return 2;
   }
-  auto world = std::make_shared<const mock::World>(mock::load_world(a.world));
-  mock::Pose2D pose = world->scenario.start_pose();
+  auto world = std::make_shared<const sim::World>(sim::load_world(a.world));
+  sim::Pose2D pose = world->scenario.start_pose();
   if (!a.pose.empty() && !parse_pose(a.pose, pose)) {
     std::cerr << "pepper_app world render: --pose must be x,y,yaw_deg, got '" << a.pose << "'\n";
     return 2;
   }
-  mock::MockRobotOptions options;
+  sim::MockRobotOptions options;
   options.lighting = a.lighting;
   options.render.noise_sigma_grey = a.noise_sigma;
   options.render.noise_seed = a.seed;
-  mock::MockRobot robot(world, options);
+  sim::MockRobot robot(world, options);
   robot.place(pose);
   robot.set_joint_angles({"HeadYaw", "HeadPitch"},
                          {a.head_yaw_deg * M_PI / 180.0, a.head_pitch_deg * M_PI / 180.0});

@@ -14,17 +14,16 @@
 #include <unistd.h>
 
 #include "evaluation/metrics.hpp"
-#include "naoqi_bridge/mock/mock_bridge.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "naoqi_bridge/mock_bridge.hpp"
 #include "session/robot_connection.hpp"
 #include "session/session_link.hpp"
 #include "session/teach_session.hpp"
 #include "session/telemetry_json.hpp"
+#include "sim/mock_robot.hpp"
 
 namespace pepper::app::evaluation {
 namespace {
 
-namespace mock = naoqi_bridge::mock;
 namespace nav = core::navigator;
 using Clock = std::chrono::steady_clock;
 constexpr double kDeg = M_PI / 180.0;
@@ -87,7 +86,7 @@ std::vector<std::string> EvaluationOptions::validate() const {
   return e;
 }
 
-TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
+TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
                        const EvaluationOptions& options, const ProgressFn& progress) {
   if (const auto errors = options.validate(); !errors.empty()) {
     throw std::invalid_argument("EvaluationOptions: " + errors.front());
@@ -105,7 +104,7 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
                     : options.map_dir;
 
   // The teach session that `teach --scripted` runs, on a simulated robot of this evaluation.
-  mock::MockRobotOptions ro;
+  sim::MockRobotOptions ro;
   ro.lighting = "teach";
   ro.render.noise_seed = options.seed;
   RobotConnection robot = open_mock_robot(world, ro, {});
@@ -154,9 +153,9 @@ TeachResult teach_tour(const std::shared_ptr<const mock::World>& world,
   return out;
 }
 
-mock::Pose2D replay_start_pose(const mock::World& world, int k, const EvaluationOptions& options) {
+sim::Pose2D replay_start_pose(const sim::World& world, int k, const EvaluationOptions& options) {
   if (options.seed == 0) return world.scenario.start_pose();
-  mock::Scenario sc = world.scenario;
+  sim::Scenario sc = world.scenario;
   sc.replay_starts = {world.scenario.start_pose()};
   sc.perturb_lateral_m = options.perturb_lateral_m;
   sc.perturb_yaw_rad = options.perturb_yaw_deg * kDeg;
@@ -164,14 +163,14 @@ mock::Pose2D replay_start_pose(const mock::World& world, int k, const Evaluation
   // Redraw (next seed) while the start touches an obstacle (0.3 m footprint + 2 cm).
   for (uint64_t attempt = 0; attempt < 50; ++attempt) {
     const uint64_t seed = options.seed + 7919 * attempt;
-    const mock::Pose2D p = sc.replay_start(static_cast<size_t>(k), seed == 0 ? 1 : seed);
+    const sim::Pose2D p = sc.replay_start(static_cast<size_t>(k), seed == 0 ? 1 : seed);
     if (!world.collision({p.x_m, p.y_m}, 0.32, 0.0)) return p;
   }
   return world.scenario.start_pose();
 }
 
-MockReplaySetup mock_replay_setup(const mock::World& start_world, int k,
-                                  const std::string& lighting, const EvaluationOptions& options) {
+MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const std::string& lighting,
+                                  const EvaluationOptions& options) {
   MockReplaySetup setup;
   setup.start = replay_start_pose(start_world, k, options);
   setup.robot.lighting = lighting;
@@ -201,7 +200,7 @@ namespace {
 /// see (left the path, drove past its end, out of time).
 class GroundTruthMonitor final : public ReplayMonitor {
  public:
-  GroundTruthMonitor(mock::MockRobot& robot, const TeachResult& teach,
+  GroundTruthMonitor(sim::MockRobot& robot, const TeachResult& teach,
                      const EvaluationOptions& options, RunResult& run, std::ofstream* trace)
       : robot_(robot),
         options_(options),
@@ -213,7 +212,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
         tracker_(taught_, 0.5 * taught_.length_m()),
         dt_s_(1.0 / robot.options().frame_rate_hz),
         time_limit_s_(options.time_limit_factor * teach.length_m / kSlowSpeedMS + 20.0) {
-    const mock::GroundTruth gt = robot_.ground_truth();
+    const sim::GroundTruth gt = robot_.ground_truth();
     last_pos_ = {gt.base.x_m, gt.base.y_m};
     run_.start_lateral_m = tracker_.update(last_pos_).lateral_m;
   }
@@ -259,7 +258,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
   /// come to rest (at most 3 s) before the final position is measured.
   void settle() {
     for (int i = 0; i < 45; ++i) {
-      const mock::GroundTruth gt = robot_.ground_truth();
+      const sim::GroundTruth gt = robot_.ground_truth();
       if (std::abs(gt.velocity.v_x_m_s) < 1e-3 && std::abs(gt.velocity.omega_rad_s) < 1e-3) return;
       robot_.advance_s(dt_s_);
       t_s_ += dt_s_;
@@ -276,7 +275,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
 
  private:
   PathProjection record(RunSample& smp, const nav::StepResult* step) {
-    const mock::GroundTruth gt = robot_.ground_truth();
+    const sim::GroundTruth gt = robot_.ground_truth();
     const Eigen::Vector2d pos(gt.base.x_m, gt.base.y_m);
     run_.travelled_m += (pos - last_pos_).norm();
     last_pos_ = pos;
@@ -302,7 +301,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
     return pr;
   }
 
-  mock::MockRobot& robot_;
+  sim::MockRobot& robot_;
   const EvaluationOptions& options_;
   RunResult& run_;
   std::ofstream* trace_;
@@ -328,8 +327,9 @@ ReplaySessionOptions replay_session_options(const EvaluationOptions& options) {
   return so;
 }
 
-RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock::World>& replay_world,
-                     const std::string& lighting, const mock::Pose2D& start, int k,
+RunResult replay_run(const TeachResult& teach,
+                     const std::shared_ptr<const sim::World>& replay_world,
+                     const std::string& lighting, const sim::Pose2D& start, int k,
                      const EvaluationOptions& options) {
   const auto wall0 = Clock::now();
   MockReplaySetup setup = mock_replay_setup(*replay_world, k, lighting, options);
@@ -380,7 +380,7 @@ RunResult replay_run(const TeachResult& teach, const std::shared_ptr<const mock:
   }
   r.frames = static_cast<int>(r.samples.size());
   r.frames_dropped =
-      static_cast<int>(static_cast<mock::MockBridge&>(*robot.bridge).frames_dropped());
+      static_cast<int>(static_cast<naoqi_bridge::MockBridge&>(*robot.bridge).frames_dropped());
   r.sim_s = monitor.sim_s();
   const Eigen::Vector2d end_m = teach.path_m.back();
   r.final_error_m = (monitor.last_position() - end_m).norm();
@@ -459,7 +459,7 @@ Summary summarize(const std::vector<RunResult>& runs, int key_images, double tau
   return s;
 }
 
-Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const mock::World>& world,
+Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::World>& world,
                     const EvaluationOptions& options, const ProgressFn& progress) {
   if (const auto errors = options.validate(); !errors.empty()) {
     throw std::invalid_argument("EvaluationOptions: " + errors.front());
@@ -485,7 +485,7 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const mock::
             options.only_runs.end()) {
       continue;
     }
-    const mock::Pose2D start = replay_start_pose(*world, k, options);
+    const sim::Pose2D start = replay_start_pose(*world, k, options);
     RunResult r = replay_run(teach, dw.world, dw.lighting, start, k, options);
     if (progress) {
       std::ostringstream os;

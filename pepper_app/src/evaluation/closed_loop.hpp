@@ -39,11 +39,11 @@
 #include "core/mapping/key_image_selector.hpp"
 #include "core/navigator/navigator.hpp"
 #include "evaluation/disturbance.hpp"
-#include "naoqi_bridge/mock/mock_bridge.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "naoqi_bridge/mock_bridge.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
 #include "session/replay_session.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/world.hpp"
 
 namespace pepper::app::evaluation {
 
@@ -176,23 +176,22 @@ using ProgressFn = std::function<void(const std::string&)>;
 /// Teaches the world's tour at the options' image size with the options' features (lines or
 /// points only: a single-modality map), saves the map to options.map_dir (or a temporary
 /// folder) and loads it back.
-TeachResult teach_tour(const std::shared_ptr<const naoqi_bridge::mock::World>& world,
+TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
                        const EvaluationOptions& options, const ProgressFn& progress = {});
 
 /// Start pose of run k (perturbed, collision-free; see EvaluationOptions).
-naoqi_bridge::mock::Pose2D replay_start_pose(const naoqi_bridge::mock::World& world, int k,
-                                             const EvaluationOptions& options);
+sim::Pose2D replay_start_pose(const sim::World& world, int k, const EvaluationOptions& options);
 
 /// The simulated robot of replay run k: its start pose and the options that build it (lighting,
 /// camera noise seed, and the latency and frame-drop disturbances). `evaluate` and `replay
 /// --robot mock:W --mock-start K --seed S` both use it, so they replay the same run.
 struct MockReplaySetup {
-  naoqi_bridge::mock::Pose2D start;
-  naoqi_bridge::mock::MockRobotOptions robot;
-  naoqi_bridge::mock::MockBridgeOptions bridge;
+  sim::Pose2D start;
+  sim::MockRobotOptions robot;
+  naoqi_bridge::MockBridgeOptions bridge;
 };
-MockReplaySetup mock_replay_setup(const naoqi_bridge::mock::World& start_world, int k,
-                                  const std::string& lighting, const EvaluationOptions& options);
+MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const std::string& lighting,
+                                  const EvaluationOptions& options);
 
 /// The camera request of teach and replay (the options' size, the mock's 15 fps).
 naoqi_bridge::CameraRequest camera_request(const EvaluationOptions& options);
@@ -202,13 +201,12 @@ ReplaySessionOptions replay_session_options(const EvaluationOptions& options);
 
 /// One replay from `start` in `replay_world` (possibly disturbed), lighting `lighting`.
 RunResult replay_run(const TeachResult& teach,
-                     const std::shared_ptr<const naoqi_bridge::mock::World>& replay_world,
-                     const std::string& lighting, const naoqi_bridge::mock::Pose2D& start, int k,
+                     const std::shared_ptr<const sim::World>& replay_world,
+                     const std::string& lighting, const sim::Pose2D& start, int k,
                      const EvaluationOptions& options);
 
 /// All replays of one configuration on a taught map, with summary.
-Evaluation evaluate(const TeachResult& teach,
-                    const std::shared_ptr<const naoqi_bridge::mock::World>& world,
+Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::World>& world,
                     const EvaluationOptions& options, const ProgressFn& progress = {});
 
 Summary summarize(const std::vector<RunResult>& runs, int key_images, double taught_length_m);

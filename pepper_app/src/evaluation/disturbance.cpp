@@ -14,7 +14,6 @@
 namespace pepper::app::evaluation {
 namespace {
 
-namespace mock = naoqi_bridge::mock;
 constexpr double kDeg = M_PI / 180.0;
 
 /// Distance from p to an oriented rectangle (0 inside).
@@ -101,7 +100,7 @@ void move_furniture(YAML::Node root, const std::vector<Eigen::Vector2d>& samples
 /// The part of the taught path a person walks beside at `offset` (left > 0), every 5 cm, or
 /// empty when it is not free: each point clear of the world by the person's 0.3 m and at least
 /// 0.9 x |offset| from the whole path.
-std::vector<Eigen::Vector2d> person_walk(const mock::World& world, const Polyline& pl, double s0,
+std::vector<Eigen::Vector2d> person_walk(const sim::World& world, const Polyline& pl, double s0,
                                          double s1, double offset) {
   std::vector<Eigen::Vector2d> walk;
   for (double s = s0; s <= s1 + 1e-9; s += 0.05) {
@@ -126,9 +125,8 @@ std::vector<Eigen::Vector2d> person_walk(const mock::World& world, const Polylin
 /// Adds a person walking beside the taught path; returns false if no free place. Preferred:
 /// the middle 25-65 % of the tour; where that is a corridor too narrow for a person beside the
 /// robot (room_corridor_room), shorter stretches nearer the ends (the rooms).
-bool add_person(YAML::Node root, const mock::World& world,
-                const std::vector<Eigen::Vector2d>& path, const DisturbanceOptions& o,
-                std::vector<std::string>& notes) {
+bool add_person(YAML::Node root, const sim::World& world, const std::vector<Eigen::Vector2d>& path,
+                const DisturbanceOptions& o, std::vector<std::string>& notes) {
   if (path.size() < 2) return false;
   const Polyline pl(path);
   const double len = pl.length_m();
@@ -225,7 +223,7 @@ std::vector<std::string> DisturbanceOptions::validate() const {
   return e;
 }
 
-DisturbedWorld make_disturbed_world(const std::shared_ptr<const mock::World>& world,
+DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& world,
                                     const std::set<Disturbance>& disturbances,
                                     const DisturbanceOptions& options,
                                     const std::vector<Eigen::Vector2d>& taught_path_m,
@@ -252,10 +250,10 @@ DisturbedWorld make_disturbed_world(const std::shared_ptr<const mock::World>& wo
     }
     YAML::Emitter em;
     em << root;
-    auto w = mock::parse_world(em.c_str(), world->source.string() + " (disturbed)",
-                               world->source.parent_path());
+    auto w = sim::parse_world(em.c_str(), world->source.string() + " (disturbed)",
+                              world->source.parent_path());
     w.source = world->source;
-    out.world = std::make_shared<const mock::World>(std::move(w));
+    out.world = std::make_shared<const sim::World>(std::move(w));
   }
   if (disturbances.count(Disturbance::kLight)) {
     if (options.light_factor == 0.0) {
@@ -266,8 +264,8 @@ DisturbedWorld make_disturbed_world(const std::shared_ptr<const mock::World>& wo
          << ", lamps x" << l.lamps;
       out.notes.push_back(os.str());
     } else {
-      auto w = std::make_shared<mock::World>(*out.world);
-      mock::LightingCondition l = w->light("teach");
+      auto w = std::make_shared<sim::World>(*out.world);
+      sim::LightingCondition l = w->light("teach");
       l.ambient *= options.light_factor;
       l.windows *= options.light_factor;
       l.lamps *= options.light_factor;

@@ -6,12 +6,12 @@
 //
 // A World is immutable and shared; a disturbed world is a new World built from the same YAML
 // file with the changes applied to the YAML tree (boxes and tables moved, a person added) and
-// re-parsed by mock::parse_world, or a copy with one more lighting condition. Furniture moves
+// re-parsed by sim::parse_world, or a copy with one more lighting condition. Furniture moves
 // and the person's walk are checked against the taught path so that they never block it: an
 // item whose move would bring it closer than `min_path_clearance_m` to the path (and closer than
 // it was) is moved less (half, then not at all).
 // Deterministic in the seed. Failure: a world without a source file cannot take YAML-level
-// disturbances (std::invalid_argument); YAML or world errors propagate (mock::WorldError).
+// disturbances (std::invalid_argument); YAML or world errors propagate (sim::WorldError).
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 
 namespace pepper::app::evaluation {
 
@@ -58,14 +58,14 @@ struct DisturbanceOptions {
 
 /// What was changed, for the report.
 struct DisturbedWorld {
-  std::shared_ptr<const naoqi_bridge::mock::World> world;
+  std::shared_ptr<const sim::World> world;
   std::string lighting = "teach";  ///< condition the replay robot must use
   std::vector<std::string> notes;  ///< one line per change ("moved table_1 by 0.21 m", ...)
 };
 
 /// The world the replay sees. `taught_path_m` is the path to keep clear (ground truth of the
 /// teach drive, or the waypoints). Only kLight, kFurniture and kPerson change the world.
-DisturbedWorld make_disturbed_world(const std::shared_ptr<const naoqi_bridge::mock::World>& world,
+DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& world,
                                     const std::set<Disturbance>& disturbances,
                                     const DisturbanceOptions& options,
                                     const std::vector<Eigen::Vector2d>& taught_path_m,

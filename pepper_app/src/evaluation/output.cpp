@@ -14,7 +14,6 @@
 namespace pepper::app::evaluation {
 namespace {
 
-namespace mock = naoqi_bridge::mock;
 using nlohmann::json;
 
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
@@ -155,7 +154,7 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
 }
 
 std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachResult& teach,
-                                               const mock::World& world,
+                                               const sim::World& world,
                                                const std::filesystem::path& dir,
                                                const std::string& prefix) {
   std::filesystem::create_directories(dir);

@@ -34,8 +34,7 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
 /// PNG plots of one evaluation into `dir` (created), file names prefixed with `prefix`
 /// (e.g. "robotics_room_lines+points_"). Returns the files written.
 std::vector<std::filesystem::path> write_plots(const Evaluation& evaluation,
-                                               const TeachResult& teach,
-                                               const naoqi_bridge::mock::World& world,
+                                               const TeachResult& teach, const sim::World& world,
                                                const std::filesystem::path& dir,
                                                const std::string& prefix);
 

@@ -4,15 +4,14 @@
 
 #include <stdexcept>
 
-#include "naoqi_bridge/mock/mock_bridge.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "naoqi_bridge/mock_bridge.hpp"
 #include "naoqi_bridge/qi/qi_bridge.hpp"
 #include "naoqi_bridge/qi/session.hpp"
 #include "naoqi_bridge/qi/url.hpp"
+#include "sim/world.hpp"
 
 namespace pepper::app {
 
-namespace mock = naoqi_bridge::mock;
 namespace qi = naoqi_bridge::qi;
 
 RobotUrl parse_robot_url(const std::string& text) {
@@ -41,16 +40,16 @@ RobotUrl parse_robot_url(const std::string& text) {
   return out;
 }
 
-RobotConnection open_mock_robot(std::shared_ptr<const mock::World> world,
-                                const mock::MockRobotOptions& robot_options,
-                                mock::MockBridgeOptions bridge_options) {
+RobotConnection open_mock_robot(std::shared_ptr<const sim::World> world,
+                                const sim::MockRobotOptions& robot_options,
+                                naoqi_bridge::MockBridgeOptions bridge_options) {
   RobotConnection c;
   c.url.kind = RobotUrl::Kind::kMock;
   c.url.world_file = world->source;
   c.url.url = "mock:" + world->source.string();
   if (bridge_options.description.empty()) bridge_options.description = c.url.url;
-  c.mock = std::make_shared<mock::MockRobot>(std::move(world), robot_options);
-  c.bridge = std::make_unique<mock::MockBridge>(*c.mock, bridge_options);
+  c.mock = std::make_shared<sim::MockRobot>(std::move(world), robot_options);
+  c.bridge = std::make_unique<naoqi_bridge::MockBridge>(*c.mock, bridge_options);
   return c;
 }
 
@@ -76,10 +75,10 @@ RobotLogin robot_login(bool tls, const std::string& user, const std::string& pas
 RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options) {
   const RobotUrl parsed = parse_robot_url(url);
   if (parsed.kind == RobotUrl::Kind::kMock) {
-    auto world = std::make_shared<const mock::World>(mock::load_world(parsed.world_file));
-    mock::MockRobotOptions ro;
+    auto world = std::make_shared<const sim::World>(sim::load_world(parsed.world_file));
+    sim::MockRobotOptions ro;
     ro.frame_rate_hz = options.mock_frame_rate_hz;
-    mock::MockBridgeOptions bo;
+    naoqi_bridge::MockBridgeOptions bo;
     bo.description = parsed.url;
     RobotConnection c = open_mock_robot(std::move(world), ro, bo);
     c.url = parsed;

@@ -11,16 +11,16 @@
 //
 // Ownership: RobotConnection owns the bridge and (for mock:) the simulated robot; the bridge is
 // destroyed first (it refers to the robot). Errors: a malformed URL throws std::invalid_argument
-// naming it; a missing world file throws the mock's WorldError; a missing password throws
+// naming it; a missing world file throws sim::WorldError; a missing password throws
 // naoqi_bridge::BridgeError. Nothing connects here: the session calls bridge->connect().
 
 #include <filesystem>
 #include <memory>
 #include <string>
 
-#include "naoqi_bridge/mock/mock_bridge.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "naoqi_bridge/mock_bridge.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
+#include "sim/mock_robot.hpp"
 
 namespace pepper::app {
 
@@ -45,17 +45,17 @@ struct RobotConnectOptions {
 
 struct RobotConnection {
   RobotUrl url;
-  std::shared_ptr<naoqi_bridge::mock::MockRobot> mock;     ///< set for mock: URLs only
-  std::unique_ptr<naoqi_bridge::RobotBridge> bridge;       ///< declared last: destroyed first
+  std::shared_ptr<sim::MockRobot> mock;               ///< set for mock: URLs only
+  std::unique_ptr<naoqi_bridge::RobotBridge> bridge;  ///< declared last: destroyed first
 };
 
 /// An in-process simulated Pepper over an already loaded world, with the simulated robot's and
 /// the WiFi link's options (lighting, camera noise seed, command latency, frame drops). The
 /// evaluation and `replay --robot mock:... --mock-start K` build their robot with it, so the same
 /// world, start and seed give the same replay. Does not connect.
-RobotConnection open_mock_robot(std::shared_ptr<const naoqi_bridge::mock::World> world,
-                                const naoqi_bridge::mock::MockRobotOptions& robot_options,
-                                naoqi_bridge::mock::MockBridgeOptions bridge_options);
+RobotConnection open_mock_robot(std::shared_ptr<const sim::World> world,
+                                const sim::MockRobotOptions& robot_options,
+                                naoqi_bridge::MockBridgeOptions bridge_options);
 
 /// The login for a robot: none for tcp:// without a user; for tcps:// (NAOqi 2.9) the user
 /// defaults to "nao" (Pepper's user). The password comes from `password_file`, else the

@@ -9,11 +9,11 @@
 
 #include "core/mapping/drive_odometer.hpp"
 #include "core/memory/visual_memory.hpp"
-#include "naoqi_bridge/mock/teach_driver.hpp"
 #include "session/recording.hpp"
 #include "session/signals.hpp"
 #include "session/taught_path.hpp"
 #include "session/telemetry_json.hpp"
+#include "sim/teach_driver.hpp"
 
 namespace pepper::app {
 
@@ -95,7 +95,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                 {"recording", options.recording_dir.string()},
                 {"camera", {{"width_px", camera.width_px}, {"height_px", camera.height_px}}}});
 
-    std::optional<nb::mock::TeachDriver> driver;
+    std::optional<sim::TeachDriver> driver;
     if (options.scripted) driver.emplace(robot.mock->world().scenario);
 
     nb::BaseVelocity drive{};  // UI drive request

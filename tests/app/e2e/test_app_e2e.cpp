@@ -21,9 +21,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/memory/visual_memory.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/world.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/world.hpp"
 
 extern char** environ;
 
@@ -31,7 +31,6 @@ namespace pepper::app {
 namespace {
 
 namespace fs = std::filesystem;
-namespace mock = naoqi_bridge::mock;
 
 const std::string kBinary = std::string(PEPPER_BINARY_DIR) + "/pepper_app/pepper_app";
 const std::string kWorldFile = std::string(PEPPER_SOURCE_DIR) + "/worlds/robotics_room.yaml";
@@ -251,8 +250,8 @@ TEST(AppE2E, SigintDuringTeachKeepsRecordingAndStopsRobot) {
 
 TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
   const fs::path dir = fresh_dir("qi");
-  auto world = std::make_shared<const mock::World>(mock::load_world(kWorldFile));
-  mock::MockRobot robot(world);
+  auto world = std::make_shared<const sim::World>(sim::load_world(kWorldFile));
+  sim::MockRobot robot(world);
   naoqi_bridge::qi::MockNaoqiServer server(robot);  // lockstep, tcp://127.0.0.1:ephemeral
   server.start();
   // Teach over the wire (the operator does not drive: a short standing tour).

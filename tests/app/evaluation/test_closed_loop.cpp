@@ -14,17 +14,15 @@
 #include "evaluation/disturbance.hpp"
 #include "evaluation/metrics.hpp"
 #include "evaluation/output.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 #include "support/temp_dir.hpp"
 
 namespace pepper::app::evaluation {
 namespace {
 
-namespace mock = naoqi_bridge::mock;
-
-std::shared_ptr<const mock::World> small_room() {
-  static const auto w = std::make_shared<const mock::World>(
-      mock::load_world(std::string(PEPPER_SOURCE_DIR) + "/tests/app/evaluation/data/small_room.yaml"));
+std::shared_ptr<const sim::World> small_room() {
+  static const auto w = std::make_shared<const sim::World>(sim::load_world(
+      std::string(PEPPER_SOURCE_DIR) + "/tests/app/evaluation/data/small_room.yaml"));
   return w;
 }
 
@@ -138,7 +136,7 @@ TEST(Disturbances, PersonWalksBesideThePathAndLightScales) {
   EXPECT_NEAR(d.world->light("evaluation").ambient, 0.6 * w->light("teach").ambient, 1e-12);
   // The person never comes within the robot's disc of the path at any time.
   const Polyline pl(w->scenario.waypoints_m);
-  const mock::MovingObstacle& p = d.world->people.back();
+  const sim::MovingObstacle& p = d.world->people.back();
   for (double t = 0.0; t < 20.0; t += 0.25) {
     const Eigen::Vector3d pose = p.pose_at(t);
     EXPECT_GT(pl.project(pose.head<2>()).distance_m, 0.3 + 0.27) << "t = " << t;
@@ -154,15 +152,15 @@ TEST(Disturbances, PersonWalksBesideThePathAndLightScales) {
 // narrow for a person beside the robot, so the person walks in one of the rooms instead; the
 // walk stays clear of the path and of the world.
 TEST(Disturbances, PersonFindsRoomWhereTheMiddleIsANarrowCorridor) {
-  const auto w = std::make_shared<const mock::World>(
-      mock::load_world(std::string(PEPPER_SOURCE_DIR) + "/worlds/room_corridor_room.yaml"));
+  const auto w = std::make_shared<const sim::World>(
+      sim::load_world(std::string(PEPPER_SOURCE_DIR) + "/worlds/room_corridor_room.yaml"));
   const DisturbedWorld d =
       make_disturbed_world(w, {Disturbance::kPerson}, {}, w->scenario.waypoints_m, 1);
   ASSERT_EQ(d.world->people.size(), w->people.size() + 1);
   ASSERT_FALSE(d.notes.empty());
   EXPECT_NE(d.notes.back().find("person walking"), std::string::npos) << d.notes.back();
   const Polyline pl(w->scenario.waypoints_m);
-  const mock::MovingObstacle& p = d.world->people.back();
+  const sim::MovingObstacle& p = d.world->people.back();
   for (double t = 0.0; t < 30.0; t += 0.25) {
     const Eigen::Vector3d pose = p.pose_at(t);
     EXPECT_GT(pl.project(pose.head<2>()).distance_m, 0.3 + 0.27) << "t = " << t;

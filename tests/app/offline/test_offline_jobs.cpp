@@ -7,15 +7,13 @@
 #include <cmath>
 #include <optional>
 
-#include "naoqi_bridge/mock/mock_bridge.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/teach_driver.hpp"
+#include "naoqi_bridge/mock_bridge.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/teach_driver.hpp"
 #include "support/temp_dir.hpp"
 
 namespace pepper::app {
 namespace {
-
-namespace mock = naoqi_bridge::mock;
 
 /// Ground-truth path length of the recorded drive, m (set by record_teach).
 double g_recorded_path_m = 0.0;
@@ -24,15 +22,15 @@ double g_recorded_path_m = 0.0;
 /// command in force while the base moved to it (the recording format's convention).
 void record_teach(const std::filesystem::path& world_file, const std::filesystem::path& folder,
                   int frames) {
-  auto world = std::make_shared<const mock::World>(mock::load_world(world_file));
-  mock::MockRobot robot(world);
-  mock::MockBridge bridge(robot);
+  auto world = std::make_shared<const sim::World>(sim::load_world(world_file));
+  sim::MockRobot robot(world);
+  naoqi_bridge::MockBridge bridge(robot);
   bridge.connect();
   const core::CameraIntrinsics camera = bridge.start_camera({0, 320, 240, 15});
-  mock::TeachDriver driver(world->scenario);
+  sim::TeachDriver driver(world->scenario);
   RecordingWriter writer(folder, camera, "mock:" + world_file.string());
   naoqi_bridge::BaseVelocity in_force{};
-  std::optional<mock::Pose2D> last;
+  std::optional<sim::Pose2D> last;
   for (int i = 0; i < frames; ++i) {
     auto frame = bridge.next_frame(std::chrono::milliseconds(1000));
     ASSERT_TRUE(frame.has_value());

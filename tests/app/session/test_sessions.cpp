@@ -9,7 +9,7 @@
 #include <optional>
 #include <thread>
 
-#include "naoqi_bridge/mock/mock_bridge.hpp"
+#include "naoqi_bridge/mock_bridge.hpp"
 #include "session/recording.hpp"
 #include "session/replay_session.hpp"
 #include "session/signals.hpp"
@@ -55,14 +55,14 @@ nav::StepResult driving_step(const core::Frame& f) {
   return r;
 }
 
-bool last_is_stop(const nb::mock::MockRobot& robot) {
+bool last_is_stop(const sim::MockRobot& robot) {
   const auto log = robot.command_log();
   if (log.empty()) return false;
   const auto& c = log.back();
   return c.stop_move || (c.velocity.v_x_m_s == 0.0 && c.velocity.omega_rad_s == 0.0);
 }
 
-bool ever_moved(const nb::mock::MockRobot& robot) {
+bool ever_moved(const sim::MockRobot& robot) {
   for (const auto& c : robot.command_log())
     if (!c.stop_move && c.velocity.v_x_m_s > 0.0) return true;
   return false;

@@ -10,15 +10,16 @@
 #include <chrono>
 #include <thread>
 
-#include "naoqi_bridge/mock/synthetic_pattern_robot.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
 #include "naoqi_bridge/qi/qi_bridge.hpp"
 #include "naoqi_bridge/qi/session.hpp"
+#include "sim/synthetic_pattern_robot.hpp"
 
 namespace qi = pepper::naoqi_bridge::qi;
 namespace nb = pepper::naoqi_bridge;
-using nb::mock::SyntheticPatternOptions;
-using nb::mock::SyntheticPatternRobot;
+namespace sim = pepper::sim;
+using sim::SyntheticPatternOptions;
+using sim::SyntheticPatternRobot;
 using namespace std::chrono_literals;
 
 namespace {
@@ -42,7 +43,7 @@ bool wait_until(Pred pred, std::chrono::milliseconds limit) {
   return pred();
 }
 
-bool is_stop(const nb::mock::CommandRecord& r) {
+bool is_stop(const sim::CommandRecord& r) {
   return r.stop_move ||
          (r.velocity.v_x_m_s == 0.0 && r.velocity.v_y_m_s == 0.0 && r.velocity.omega_rad_s == 0.0);
 }
@@ -91,6 +92,23 @@ TEST(QiLoopback, SessionFindsServicesAndResolvesOverloads) {
     EXPECT_NE(text.find("ALAutonomousLife.setState"), std::string::npos) << text;
     EXPECT_NE(text.find("invalid state 'bogus'"), std::string::npos) << text;
   }
+  // Joints the simulated robot does not have (sim::SimError) are Error replies carrying the
+  // method and the robot's text.
+  const auto expect_refused = [&](const char* method, const char* signature,
+                                  std::vector<qi::Value> args, const std::string& text) {
+    try {
+      (void)session.call(motion, method, signature, std::move(args));
+      FAIL() << method;
+    } catch (const qi::RemoteCallError& e) {
+      EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+    }
+  };
+  expect_refused(
+      "setAngles", "(mmf)",
+      {qi::Value::strings({"LElbowRoll"}), qi::Value::floats({0.0f}), qi::Value::float32(0.1f)},
+      "ALMotion::setAngles: set_joint_angles: unknown joint 'LElbowRoll'");
+  expect_refused("getAngles", "(mb)", {qi::Value::strings({"Nope"}), qi::Value::boolean(true)},
+                 "ALMotion::getAngles: joint_angles: unknown joint 'Nope'");
   // The connection survives remote errors.
   EXPECT_EQ(session.call(life, "getState", "()", {}).as_string(), "solitary");
 }

@@ -1,6 +1,6 @@
 #pragma once
 // MockNaoqiServer: a NAOqi stand-in that speaks the qi-messaging wire protocol on behalf of a
-// simulated robot (any mock::SimRobot), so tests and offline replays cross the real wire format.
+// simulated robot (any sim::SimRobot), so tests and offline replays cross the real wire format.
 //
 // Serves service 0 (authenticate, optional user/password check), the ServiceDirectory (service
 // 1: service, services, machineId) and ALMotion, ALVideoDevice, ALRobotPosture, ALAutonomousLife,
@@ -8,7 +8,8 @@
 // with its MetaObject. Backing: getImageRemote renders SimRobot::capture() at the subscribed
 // resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints.
 // When a connection that commanded the base drops, the server stops the base (stop_move), so a
-// lost client never leaves the simulated robot driving. Errors follow libqi's texts (3.2).
+// lost client never leaves the simulated robot driving. Errors follow libqi's texts (3.2); a
+// request the SimRobot refuses (sim::SimError) becomes an Error reply carrying its text.
 //
 // tcp:// or tcps:// (TLS 1.2, certificate and key from files, or a self-signed EC certificate
 // generated at start-up). Port 0 picks an ephemeral port: read url() after start().
@@ -27,8 +28,9 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/sim_robot.hpp"
 #include "naoqi_bridge/qi/codec.hpp"
+#include "naoqi_bridge/robot_bridge.hpp"
+#include "sim/sim_robot.hpp"
 
 namespace pepper::naoqi_bridge::qi {
 
@@ -61,7 +63,7 @@ struct MockServerOptions {
 
 class MockNaoqiServer {
  public:
-  MockNaoqiServer(mock::SimRobot& robot, MockServerOptions options = {});
+  MockNaoqiServer(sim::SimRobot& robot, MockServerOptions options = {});
   ~MockNaoqiServer();
   MockNaoqiServer(const MockNaoqiServer&) = delete;
   MockNaoqiServer& operator=(const MockNaoqiServer&) = delete;

@@ -24,12 +24,12 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/kinematics.hpp"
-#include "naoqi_bridge/mock/renderer.hpp"
-#include "naoqi_bridge/mock/sim_robot.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/kinematics.hpp"
+#include "sim/renderer.hpp"
+#include "sim/sim_robot.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 struct CameraMount {
   double camera_height_m = 1.153;   ///< optical centre above the floor at zero joints
@@ -62,8 +62,8 @@ struct CollisionEvent {
 /// Evaluation-only truth about the simulated robot.
 struct GroundTruth {
   int64_t t_ns = 0;
-  Pose2D base;            ///< base rotation axis in the world frame
-  BaseVelocity velocity;  ///< actual robot-frame velocity
+  Pose2D base;                  ///< base rotation axis in the world frame
+  core::BaseVelocity velocity;  ///< actual robot-frame velocity
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();
   int64_t frames = 0;  ///< frames captured so far
   std::optional<CollisionEvent> collision;
@@ -78,7 +78,7 @@ class MockRobot final : public SimRobot {
   // SimRobot
   core::Frame capture(int width_px, int height_px) override;
   core::CameraIntrinsics intrinsics(int width_px, int height_px) const override;
-  void command_velocity(const BaseVelocity& velocity) override;
+  void command_velocity(const core::BaseVelocity& velocity) override;
   void stop_move() override;
   void set_joint_angles(const std::vector<std::string>& names,
                         const std::vector<double>& angles_rad) override;
@@ -122,4 +122,4 @@ class MockRobot final : public SimRobot {
   std::vector<CommandRecord> log_;
 };
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 namespace {
 
 using ::testing::AllOf;
@@ -196,9 +196,9 @@ TEST(World, MovingObstacleWalksBackAndForth) {
 }
 
 }  // namespace
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 namespace {
 
 TEST(World, ReplayStartsArePerturbedWithinRangesDeterministically) {
@@ -225,4 +225,4 @@ TEST(World, ReplayStartsArePerturbedWithinRangesDeterministically) {
 }
 
 }  // namespace
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include "naoqi_bridge/mock/kinematics.hpp"
+#include "sim/kinematics.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 namespace {
 
 constexpr int64_t kSecond = 1'000'000'000;
@@ -19,7 +19,7 @@ KinematicsOptions instant() {
 
 TEST(Kinematics, ClosedFormMatchesFineEulerIntegration) {
   // Exact arc vs 1e5 tiny Euler steps of the same robot-frame velocity, lateral speed included.
-  const BaseVelocity v{0.25, -0.1, 0.7};
+  const core::BaseVelocity v{0.25, -0.1, 0.7};
   const Pose2D start{1.0, -2.0, 0.4};
   const double T = 3.0;
   Pose2D e = start;
@@ -153,4 +153,4 @@ TEST(Kinematics, InvalidOptionsNameTheField) {
 }
 
 }  // namespace
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

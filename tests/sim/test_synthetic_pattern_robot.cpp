@@ -4,10 +4,10 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
-#include "naoqi_bridge/mock/synthetic_pattern_robot.hpp"
+#include "sim/synthetic_pattern_robot.hpp"
 
-namespace nb = pepper::naoqi_bridge;
-using nb::mock::SyntheticPatternRobot;
+namespace sim = pepper::sim;
+using sim::SyntheticPatternRobot;
 
 TEST(SyntheticPatternRobot, FramesAreSelfCheckingAndOrdered) {
   SyntheticPatternRobot robot;
@@ -44,6 +44,6 @@ TEST(SyntheticPatternRobot, JointsAndUnknownNames) {
   SyntheticPatternRobot robot;
   robot.set_joint_angles({"HeadYaw", "HeadPitch"}, {0.1, -0.2});
   EXPECT_EQ(robot.joint_angles({"HeadPitch", "HeadYaw"}), (std::vector<double>{-0.2, 0.1}));
-  EXPECT_THROW(robot.set_joint_angles({"LElbowRoll"}, {0.0}), nb::BridgeError);
-  EXPECT_THROW((void)robot.joint_angles({"Nope"}), nb::BridgeError);
+  EXPECT_THROW(robot.set_joint_angles({"LElbowRoll"}, {0.0}), sim::SimError);
+  EXPECT_THROW((void)robot.joint_angles({"Nope"}), sim::SimError);
 }

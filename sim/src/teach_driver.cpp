@@ -1,11 +1,11 @@
 // Scripted teach drive on ground truth (see teach_driver.hpp).
-#include "naoqi_bridge/mock/teach_driver.hpp"
+#include "sim/teach_driver.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 std::vector<std::string> TeachDriverOptions::validate() const {
   std::vector<std::string> errors;
@@ -29,7 +29,7 @@ TeachDriver::TeachDriver(const Scenario& scenario, TeachDriverOptions options)
                      (scenario_.waypoints_m[i] - scenario_.waypoints_m[i - 1]).norm());
 }
 
-BaseVelocity TeachDriver::command(const Pose2D& pose, double t_s) {
+core::BaseVelocity TeachDriver::command(const Pose2D& pose, double t_s) {
   if (done_) return {};
   if (scenario_.waypoints_m.size() < 2) {
     double t0 = 0.0;
@@ -88,4 +88,4 @@ BaseVelocity TeachDriver::command(const Pose2D& pose, double t_s) {
   return {v, 0.0, omega};
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -7,15 +7,16 @@
 // so that |omega| stays within max_omega_rad_s, turning on the spot when the heading error exceeds
 // turn_in_place_rad; done within goal_tolerance_m of the last waypoint.
 // Script: the velocity steps of the scenario, each for its duration; done after the last one.
-// Units: robot-frame velocities (BaseVelocity), world poses (Pose2D), seconds.
+// Units: robot-frame velocities (core::BaseVelocity), world poses (Pose2D), seconds.
 // Thread-safety: none.
 
+#include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/world.hpp"
-#include "naoqi_bridge/robot_bridge.hpp"
+#include "core/base_velocity.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 struct TeachDriverOptions {
   double lookahead_m = 0.6;
@@ -33,7 +34,7 @@ class TeachDriver {
   explicit TeachDriver(const Scenario& scenario, TeachDriverOptions options = {});
 
   /// Command for the current ground-truth pose at elapsed teach time t_s (script mode).
-  BaseVelocity command(const Pose2D& pose, double t_s);
+  core::BaseVelocity command(const Pose2D& pose, double t_s);
   bool done() const { return done_; }
   /// Distance driven along the path so far (waypoint mode), metres.
   double progress_m() const { return progress_m_; }
@@ -46,4 +47,4 @@ class TeachDriver {
   bool done_ = false;
 };
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

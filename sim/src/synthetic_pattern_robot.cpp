@@ -1,11 +1,11 @@
 // SyntheticPatternRobot: self-checking moving test pattern (see the header).
-#include "naoqi_bridge/mock/synthetic_pattern_robot.hpp"
+#include "sim/synthetic_pattern_robot.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <cstring>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 namespace {
 
@@ -42,7 +42,7 @@ std::vector<std::string> SyntheticPatternOptions::validate() const {
 SyntheticPatternRobot::SyntheticPatternRobot(SyntheticPatternOptions options)
     : options_(options), start_wall_ns_(steady_ns()) {
   const auto errors = options_.validate();
-  if (!errors.empty()) throw BridgeError("SyntheticPatternOptions: " + errors.front());
+  if (!errors.empty()) throw SimError("SyntheticPatternOptions: " + errors.front());
   for (const char* j : kJointNames) joints_rad_[j] = 0.0;
 }
 
@@ -80,8 +80,8 @@ void SyntheticPatternRobot::integrate_to_locked(int64_t t_ns) {
 
 core::Frame SyntheticPatternRobot::capture(int width_px, int height_px) {
   if (width_px < 8 || height_px < 2 || width_px > 4096 || height_px > 4096) {
-    throw BridgeError("SyntheticPatternRobot::capture: unsupported size " +
-                      std::to_string(width_px) + "x" + std::to_string(height_px));
+    throw SimError("SyntheticPatternRobot::capture: unsupported size " + std::to_string(width_px) +
+                   "x" + std::to_string(height_px));
   }
   std::lock_guard lock(mutex_);
   if (options_.clock == SyntheticPatternOptions::Clock::kLockstep) {
@@ -134,7 +134,7 @@ core::CameraIntrinsics SyntheticPatternRobot::intrinsics(int width_px, int heigh
   return core::CameraIntrinsics::pepper_top_vga().scaled_to(width_px, height_px);
 }
 
-void SyntheticPatternRobot::command_velocity(const BaseVelocity& velocity) {
+void SyntheticPatternRobot::command_velocity(const core::BaseVelocity& velocity) {
   std::lock_guard lock(mutex_);
   const int64_t t = now_ns_locked();
   integrate_to_locked(t);
@@ -146,19 +146,19 @@ void SyntheticPatternRobot::stop_move() {
   std::lock_guard lock(mutex_);
   const int64_t t = now_ns_locked();
   integrate_to_locked(t);
-  velocity_ = BaseVelocity{};
-  log_.push_back({t, BaseVelocity{}, true});
+  velocity_ = core::BaseVelocity{};
+  log_.push_back({t, core::BaseVelocity{}, true});
 }
 
 void SyntheticPatternRobot::set_joint_angles(const std::vector<std::string>& names,
                                              const std::vector<double>& angles_rad) {
   if (names.size() != angles_rad.size()) {
-    throw BridgeError("set_joint_angles: " + std::to_string(names.size()) + " names for " +
-                      std::to_string(angles_rad.size()) + " angles");
+    throw SimError("set_joint_angles: " + std::to_string(names.size()) + " names for " +
+                   std::to_string(angles_rad.size()) + " angles");
   }
   std::lock_guard lock(mutex_);
   for (const auto& n : names) {
-    if (!joints_rad_.count(n)) throw BridgeError("set_joint_angles: unknown joint '" + n + "'");
+    if (!joints_rad_.count(n)) throw SimError("set_joint_angles: unknown joint '" + n + "'");
   }
   for (size_t i = 0; i < names.size(); ++i) joints_rad_[names[i]] = angles_rad[i];
 }
@@ -169,7 +169,7 @@ std::vector<double> SyntheticPatternRobot::joint_angles(
   std::vector<double> out;
   for (const auto& n : names) {
     auto it = joints_rad_.find(n);
-    if (it == joints_rad_.end()) throw BridgeError("joint_angles: unknown joint '" + n + "'");
+    if (it == joints_rad_.end()) throw SimError("joint_angles: unknown joint '" + n + "'");
     out.push_back(it->second);
   }
   return out;
@@ -185,4 +185,4 @@ SyntheticPatternRobot::Pose2 SyntheticPatternRobot::pose() const {
   return pose_;
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -1,12 +1,12 @@
 // Simulated Pepper base (see kinematics.hpp).
-#include "naoqi_bridge/mock/kinematics.hpp"
+#include "sim/kinematics.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 namespace {
 
@@ -45,7 +45,7 @@ std::vector<std::string> KinematicsOptions::validate() const {
   return errors;
 }
 
-Pose2D integrate_constant(const Pose2D& start, const BaseVelocity& v, double dt_s) {
+Pose2D integrate_constant(const Pose2D& start, const core::BaseVelocity& v, double dt_s) {
   const double w = v.omega_rad_s;
   const double a = w * dt_s;
   double dx, dy;  // displacement in the start's robot frame
@@ -78,8 +78,8 @@ void BaseKinematics::reset(const Pose2D& pose, int64_t t_ns) {
   next_control_ns_ = t_ns;
 }
 
-BaseVelocity BaseKinematics::clamp(const BaseVelocity& v) const {
-  BaseVelocity c = v;
+core::BaseVelocity BaseKinematics::clamp(const core::BaseVelocity& v) const {
+  core::BaseVelocity c = v;
   auto finite = [](double x) { return std::isfinite(x) ? x : 0.0; };
   c.v_x_m_s = finite(c.v_x_m_s);
   c.v_y_m_s = finite(c.v_y_m_s);
@@ -93,7 +93,7 @@ BaseVelocity BaseKinematics::clamp(const BaseVelocity& v) const {
   return c;
 }
 
-void BaseKinematics::command(const BaseVelocity& velocity, int64_t t_ns) {
+void BaseKinematics::command(const core::BaseVelocity& velocity, int64_t t_ns) {
   const int64_t at =
       std::max(t_ns, t_ns_) + static_cast<int64_t>(std::llround(options_.latency_s * 1e9));
   // Commands keep their order; a later command never takes effect before an earlier one.
@@ -166,7 +166,7 @@ bool BaseKinematics::advance_to(int64_t t_end_ns,
       next_control_ns_ = pending_.front().effective_ns;
       t_next = std::min(t_next, next_control_ns_);
     }
-    BaseVelocity v = velocity_;
+    core::BaseVelocity v = velocity_;
     if (noisy) {
       const double k = 1.0 + options_.noise_rel * gaussian();
       v.v_x_m_s = v.v_x_m_s * k + options_.noise_v_m_s * gaussian();
@@ -188,4 +188,4 @@ bool BaseKinematics::advance_to(int64_t t_end_ns,
   return true;
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

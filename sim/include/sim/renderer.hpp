@@ -24,9 +24,9 @@
 #include <vector>
 
 #include "core/camera/intrinsics.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 struct RenderOptions {
   double near_m = 0.02;                  ///< near clipping plane, metres (> 0)
@@ -87,4 +87,4 @@ class Renderer {
   std::vector<Quad> scratch_quads_;
 };
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -4,7 +4,7 @@
 // clip against the image rectangle, then fill rows. For the quad's plane n . P = c (camera frame)
 // and the ray d = ((u - cx)/fx, (v - cy)/fy, 1), the point seen is P = d * c / (n . d), hence
 // 1/z = (n . d) / c and (texcoord)/z are affine in (u, v): w = w0 + wx u + wy v, etc.
-#include "naoqi_bridge/mock/renderer.hpp"
+#include "sim/renderer.hpp"
 
 #include <algorithm>
 #include <array>
@@ -15,7 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 namespace {
 
@@ -435,4 +435,4 @@ cv::Mat Renderer::depth_m() const {
   return d;
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -1,12 +1,27 @@
-// In-process RobotBridge over a SimRobot (see mock_bridge.hpp).
-#include "naoqi_bridge/mock/mock_bridge.hpp"
+// In-process RobotBridge over a sim::SimRobot (see mock_bridge.hpp).
+#include "naoqi_bridge/mock_bridge.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::naoqi_bridge {
 
-MockBridge::MockBridge(SimRobot& robot, MockBridgeOptions options)
+namespace {
+
+/// Runs `call` on the simulated robot; a request it refuses (sim::SimError) becomes the
+/// BridgeError that every RobotBridge caller handles, with the same text.
+template <typename Call>
+auto on_robot(Call&& call) -> decltype(call()) {
+  try {
+    return call();
+  } catch (const sim::SimError& e) {
+    throw BridgeError(e.what());
+  }
+}
+
+}  // namespace
+
+MockBridge::MockBridge(sim::SimRobot& robot, MockBridgeOptions options)
     : robot_(robot), options_(std::move(options)), wifi_(options_.wifi) {}
 
 void MockBridge::connect() {
@@ -26,7 +41,7 @@ core::CameraIntrinsics MockBridge::start_camera(const CameraRequest& request) {
     throw BridgeError("MockBridge::start_camera: bad size " + std::to_string(request.width_px) +
                       "x" + std::to_string(request.height_px));
   camera_ = request;
-  return robot_.intrinsics(request.width_px, request.height_px);
+  return on_robot([&] { return robot_.intrinsics(request.width_px, request.height_px); });
 }
 
 std::optional<core::Frame> MockBridge::next_frame(std::chrono::milliseconds /*timeout*/) {
@@ -34,7 +49,8 @@ std::optional<core::Frame> MockBridge::next_frame(std::chrono::milliseconds /*ti
   if (state_ != ConnectionState::kConnected)
     throw BridgeError("MockBridge::next_frame: not connected");
   if (!camera_) throw BridgeError("MockBridge::next_frame: camera not started");
-  core::Frame frame = robot_.capture(camera_->width_px, camera_->height_px);
+  core::Frame frame =
+      on_robot([&] { return robot_.capture(camera_->width_px, camera_->height_px); });
   return wifi_.transmit(frame, robot_.now_ns());
 }
 
@@ -42,8 +58,11 @@ HeadLockStatus MockBridge::lock_head(const HeadLockRequest& request) {
   std::lock_guard lock(mutex_);
   if (state_ != ConnectionState::kConnected)
     throw BridgeError("MockBridge::lock_head: not connected");
-  robot_.set_joint_angles({"HeadYaw", "HeadPitch"}, {request.head_yaw_rad, request.head_pitch_rad});
-  const auto angles = robot_.joint_angles({"HeadYaw", "HeadPitch"});
+  const auto angles = on_robot([&] {
+    robot_.set_joint_angles({"HeadYaw", "HeadPitch"},
+                            {request.head_yaw_rad, request.head_pitch_rad});
+    return robot_.joint_angles({"HeadYaw", "HeadPitch"});
+  });
   HeadLockStatus s;
   s.head_yaw_rad = angles.at(0);
   s.head_pitch_rad = angles.at(1);
@@ -86,7 +105,7 @@ ConnectionState MockBridge::state() const {
 
 std::string MockBridge::describe() const { return options_.description; }
 
-std::vector<CommandRecord> MockBridge::log() const {
+std::vector<sim::CommandRecord> MockBridge::log() const {
   std::lock_guard lock(mutex_);
   return log_;
 }
@@ -96,4 +115,4 @@ int64_t MockBridge::frames_dropped() const {
   return wifi_.dropped();
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::naoqi_bridge

@@ -23,9 +23,9 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/texture.hpp"
+#include "sim/texture.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 /// A world file that cannot be read, parsed or validated. what() names file, line and key.
 class WorldError : public std::runtime_error {
@@ -170,4 +170,4 @@ World parse_world(const std::string& yaml_text, const std::string& source_name,
 /// A few lines describing the world (counts, bounds, lighting, scenario), for `world check`.
 std::string summary(const World& world);
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

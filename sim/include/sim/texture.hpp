@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 /// Which pattern a texture shows. Values are the YAML names (texture_kind_from_string).
 enum class TextureKind {
@@ -85,4 +85,4 @@ Texture make_texture(const TextureSpec& spec, const std::filesystem::path& base_
 std::vector<std::string> validate(const TextureSpec& spec, const std::filesystem::path& base_dir,
                                   const std::string& where);
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -7,11 +7,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/renderer.hpp"
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/renderer.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 namespace {
 
 // Camera frame (x right, y down, z forward) looking along world +x from (0, 0, h).
@@ -290,4 +290,4 @@ TEST(Renderer, RejectsInvalidOptionsAndIntrinsics) {
 }
 
 }  // namespace
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/world.hpp"
-#include "naoqi_bridge/robot_bridge.hpp"
+#include "core/base_velocity.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 struct KinematicsOptions {
   double max_v_xy_m_s = 0.35;          ///< ALMotion MaxVelXY default
@@ -43,7 +43,7 @@ struct KinematicsOptions {
 
 /// Exact pose after moving with constant robot-frame velocity for dt_s (an arc, or a line when
 /// omega is ~0). Yaw is wrapped to (-pi, pi].
-Pose2D integrate_constant(const Pose2D& start, const BaseVelocity& velocity, double dt_s);
+Pose2D integrate_constant(const Pose2D& start, const core::BaseVelocity& velocity, double dt_s);
 
 class BaseKinematics {
  public:
@@ -54,7 +54,7 @@ class BaseKinematics {
   void reset(const Pose2D& pose, int64_t t_ns);
 
   /// A velocity command received at t_ns (>= the current time); effective after the latency.
-  void command(const BaseVelocity& velocity, int64_t t_ns);
+  void command(const core::BaseVelocity& velocity, int64_t t_ns);
 
   /// Advances the clock to t_end_ns. `blocked(pose, t_ns)` is asked after every step; when it
   /// returns true the base goes back to the pose before that step, stops (velocity zero) and
@@ -67,24 +67,24 @@ class BaseKinematics {
 
   const Pose2D& pose() const { return pose_; }
   /// Actual velocity now (robot frame, without the per-step noise).
-  const BaseVelocity& velocity() const { return velocity_; }
+  const core::BaseVelocity& velocity() const { return velocity_; }
   /// The velocity the base is steering towards (clamped command in force).
-  const BaseVelocity& target() const { return target_; }
+  const core::BaseVelocity& target() const { return target_; }
   int64_t now_ns() const { return t_ns_; }
   const KinematicsOptions& options() const { return options_; }
 
  private:
   struct Pending {
     int64_t effective_ns;
-    BaseVelocity velocity;
+    core::BaseVelocity velocity;
   };
-  BaseVelocity clamp(const BaseVelocity& v) const;
+  core::BaseVelocity clamp(const core::BaseVelocity& v) const;
   double gaussian();
 
   KinematicsOptions options_;
   Pose2D pose_;
-  BaseVelocity velocity_;
-  BaseVelocity target_;
+  core::BaseVelocity velocity_;
+  core::BaseVelocity target_;
   std::deque<Pending> pending_;
   int64_t t_ns_ = 0;
   int64_t next_control_ns_ = 0;
@@ -93,4 +93,4 @@ class BaseKinematics {
   double spare_ = 0.0;
 };
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

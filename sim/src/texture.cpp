@@ -1,5 +1,5 @@
 // Procedural and image textures for the mock world (see texture.hpp).
-#include "naoqi_bridge/mock/texture.hpp"
+#include "sim/texture.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,9 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 namespace {
 
@@ -292,4 +292,4 @@ Texture make_texture(const TextureSpec& spec, const std::filesystem::path& base_
   return Texture(spec.name, resized, spec.repeat);
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

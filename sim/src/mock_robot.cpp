@@ -1,12 +1,12 @@
 // Simulated Pepper (see mock_robot.hpp).
-#include "naoqi_bridge/mock/mock_robot.hpp"
+#include "sim/mock_robot.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 namespace {
 
@@ -104,8 +104,8 @@ void MockRobot::advance_locked(int64_t t_end_ns) {
 
 core::Frame MockRobot::capture(int width_px, int height_px) {
   if (width_px <= 0 || height_px <= 0 || width_px > 4096 || height_px > 4096)
-    throw BridgeError("MockRobot::capture: bad size " + std::to_string(width_px) + "x" +
-                      std::to_string(height_px));
+    throw SimError("MockRobot::capture: bad size " + std::to_string(width_px) + "x" +
+                   std::to_string(height_px));
   std::lock_guard lock(mutex_);
   const int64_t period_ns = std::llround(1e9 / options_.frame_rate_hz);
   advance_locked(base_.now_ns() + period_ns);
@@ -127,7 +127,7 @@ core::CameraIntrinsics MockRobot::intrinsics(int width_px, int height_px) const 
   return options_.intrinsics_vga.scaled_to(width_px, height_px);
 }
 
-void MockRobot::command_velocity(const BaseVelocity& velocity) {
+void MockRobot::command_velocity(const core::BaseVelocity& velocity) {
   std::lock_guard lock(mutex_);
   log_.push_back({base_.now_ns(), velocity, false});
   if (!collision_) base_.command(velocity, base_.now_ns());
@@ -135,23 +135,23 @@ void MockRobot::command_velocity(const BaseVelocity& velocity) {
 
 void MockRobot::stop_move() {
   std::lock_guard lock(mutex_);
-  log_.push_back({base_.now_ns(), BaseVelocity{}, true});
-  if (!collision_) base_.command(BaseVelocity{}, base_.now_ns());
+  log_.push_back({base_.now_ns(), core::BaseVelocity{}, true});
+  if (!collision_) base_.command(core::BaseVelocity{}, base_.now_ns());
 }
 
 void MockRobot::set_joint_angles(const std::vector<std::string>& names,
                                  const std::vector<double>& angles_rad) {
   if (names.size() != angles_rad.size())
-    throw BridgeError("MockRobot::set_joint_angles: " + std::to_string(names.size()) +
-                      " names but " + std::to_string(angles_rad.size()) + " angles");
+    throw SimError("MockRobot::set_joint_angles: " + std::to_string(names.size()) + " names but " +
+                   std::to_string(angles_rad.size()) + " angles");
   std::lock_guard lock(mutex_);
   for (size_t i = 0; i < names.size(); ++i) {
     const JointRange* range = nullptr;
     for (const JointRange& j : kJoints)
       if (names[i] == j.name) range = &j;
-    if (!range) throw BridgeError("MockRobot::set_joint_angles: unknown joint '" + names[i] + "'");
+    if (!range) throw SimError("MockRobot::set_joint_angles: unknown joint '" + names[i] + "'");
     if (!std::isfinite(angles_rad[i]))
-      throw BridgeError("MockRobot::set_joint_angles: non-finite angle for " + names[i]);
+      throw SimError("MockRobot::set_joint_angles: non-finite angle for " + names[i]);
     const double a = std::clamp(angles_rad[i], range->lo, range->hi);
     if (names[i] == "HeadYaw") head_yaw_rad_ = a;
     if (names[i] == "HeadPitch") head_pitch_rad_ = a;
@@ -176,7 +176,7 @@ std::vector<double> MockRobot::joint_angles(const std::vector<std::string>& name
     else if (n == "KneePitch")
       out.push_back(knee_pitch_rad_);
     else
-      throw BridgeError("MockRobot::joint_angles: unknown joint '" + n + "'");
+      throw SimError("MockRobot::joint_angles: unknown joint '" + n + "'");
   }
   return out;
 }
@@ -231,4 +231,4 @@ cv::Mat MockRobot::last_depth_m() const {
   return renderer_.depth_m();
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

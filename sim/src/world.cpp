@@ -1,6 +1,6 @@
 // World file parsing, validation and geometry building (see world.hpp; format in
 // docs/mock_robot.md).
-#include "naoqi_bridge/mock/world.hpp"
+#include "sim/world.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 namespace {
 
@@ -880,4 +880,4 @@ std::string summary(const World& w) {
   return os.str();
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

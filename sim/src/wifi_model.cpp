@@ -1,10 +1,10 @@
 // Frame drops and delays of a simulated WiFi link (see wifi_model.hpp).
-#include "naoqi_bridge/mock/wifi_model.hpp"
+#include "sim/wifi_model.hpp"
 
 #include <cmath>
 #include <stdexcept>
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 std::vector<std::string> WifiOptions::validate() const {
   std::vector<std::string> errors;
@@ -56,4 +56,4 @@ std::optional<core::Frame> WifiModel::transmit(const core::Frame& frame, int64_t
   return out;
 }
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

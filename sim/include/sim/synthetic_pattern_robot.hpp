@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "naoqi_bridge/mock/sim_robot.hpp"
+#include "sim/sim_robot.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 struct SyntheticPatternOptions {
   enum class Clock { kLockstep, kWallClock };
@@ -38,11 +38,12 @@ struct SyntheticPatternOptions {
 
 class SyntheticPatternRobot : public SimRobot {
  public:
+  /// Throws SimError naming the first invalid option.
   explicit SyntheticPatternRobot(SyntheticPatternOptions options = {});
 
   core::Frame capture(int width_px, int height_px) override;
   core::CameraIntrinsics intrinsics(int width_px, int height_px) const override;
-  void command_velocity(const BaseVelocity& velocity) override;
+  void command_velocity(const core::BaseVelocity& velocity) override;
   void stop_move() override;
   void set_joint_angles(const std::vector<std::string>& names,
                         const std::vector<double>& angles_rad) override;
@@ -73,9 +74,9 @@ class SyntheticPatternRobot : public SimRobot {
   int64_t integrated_t_ns_ = 0;  ///< time up to which the pose is integrated
   int64_t next_index_ = 0;
   Pose2 pose_;
-  BaseVelocity velocity_;
+  core::BaseVelocity velocity_;
   std::map<std::string, double> joints_rad_;
   std::vector<CommandRecord> log_;
 };
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

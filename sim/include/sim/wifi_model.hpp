@@ -18,7 +18,7 @@
 
 #include "core/frame.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 
 struct WifiOptions {
   double drop_probability = 0.0;  ///< [0, 1)
@@ -54,4 +54,4 @@ class WifiModel {
   int64_t last_delivered_ns_ = -1;
 };
 
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim

@@ -1,34 +1,23 @@
-// MockRobot and MockBridge: lockstep clock, camera mount, collisions, bridge semantics, WiFi.
+// MockRobot, TeachDriver and WifiModel: lockstep clock, camera mount, collisions, WiFi.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <thread>
 
-#include "naoqi_bridge/mock/mock_bridge.hpp"
-#include "naoqi_bridge/mock/mock_robot.hpp"
-#include "naoqi_bridge/mock/teach_driver.hpp"
-#include "naoqi_bridge/mock/wifi_model.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/teach_driver.hpp"
+#include "sim/wifi_model.hpp"
+#include "support/sim_fixtures.hpp"
 
-namespace pepper::naoqi_bridge::mock {
+namespace pepper::sim {
 namespace {
 
-using std::chrono::milliseconds;
+using test::room;
+using test::small_fast;
 
 const std::filesystem::path kWorlds = std::filesystem::path(PEPPER_SOURCE_DIR) / "worlds";
-
-std::shared_ptr<const World> room() {
-  static const auto w = std::make_shared<const World>(load_world(kWorlds / "robotics_room.yaml"));
-  return w;
-}
-
-MockRobotOptions small_fast() {
-  MockRobotOptions o;
-  o.render.noise_sigma_grey = 1.0;
-  return o;
-}
 
 TEST(MockRobot, CameraMountMatchesPepperAtZeroJoints) {
   MockRobot robot(room(), small_fast());
@@ -56,8 +45,8 @@ TEST(MockRobot, HeadPitchLooksDownAndYawLooksLeft) {
   // Limits clamp (URDF HeadPitch up to -0.707), unknown joints throw.
   robot.set_joint_angles({"HeadPitch"}, {-2.0});
   EXPECT_NEAR(robot.joint_angles({"HeadPitch"})[0], -0.707, 1e-12);
-  EXPECT_THROW(robot.set_joint_angles({"LWristYaw"}, {0.0}), BridgeError);
-  EXPECT_THROW(robot.joint_angles({"Nose"}), BridgeError);
+  EXPECT_THROW(robot.set_joint_angles({"LWristYaw"}, {0.0}), SimError);
+  EXPECT_THROW(robot.joint_angles({"Nose"}), SimError);
 }
 
 TEST(MockRobot, CaptureAdvancesTheClockOneFramePeriod) {
@@ -177,99 +166,6 @@ TEST(TeachDriver, VelocityScriptIsPlayedStepByStep) {
   EXPECT_THROW(TeachDriver{Scenario{}}, std::invalid_argument);
 }
 
-TEST(MockBridge, MoveReachesTheBaseAndStopZeroesIt) {
-  MockRobot robot(room(), small_fast());
-  MockBridge bridge(robot);
-  EXPECT_THROW(bridge.move({0.1, 0, 0}), BridgeError);  // not connected
-  bridge.connect();
-  EXPECT_EQ(bridge.state(), ConnectionState::kConnected);
-  bridge.start_camera({0, 320, 240, 15});
-  bridge.move({0.2, 0.0, 0.1});
-  ASSERT_FALSE(robot.command_log().empty());
-  EXPECT_EQ(robot.command_log().back().velocity.v_x_m_s, 0.2);
-  EXPECT_EQ(robot.command_log().back().velocity.omega_rad_s, 0.1);
-  for (int i = 0; i < 15; ++i) bridge.next_frame(milliseconds(100));
-  EXPECT_NEAR(robot.ground_truth().velocity.v_x_m_s, 0.2, 1e-12);
-  bridge.stop();
-  EXPECT_TRUE(robot.command_log().back().stop_move);
-  EXPECT_TRUE(bridge.log().back().stop_move);
-  for (int i = 0; i < 30; ++i) bridge.next_frame(milliseconds(100));
-  EXPECT_EQ(robot.ground_truth().velocity.v_x_m_s, 0.0);
-  EXPECT_EQ(robot.ground_truth().velocity.omega_rad_s, 0.0);
-  bridge.release();
-  EXPECT_THROW(bridge.next_frame(milliseconds(1)), BridgeError);  // camera released
-}
-
-TEST(MockBridge, FramesComeWithIncreasingTimestamps) {
-  MockRobot robot(room(), small_fast());
-  MockBridge bridge(robot);
-  bridge.connect();
-  EXPECT_THROW(bridge.start_camera({1, 320, 240, 15}), BridgeError);  // bottom camera
-  const core::CameraIntrinsics k = bridge.start_camera({0, 320, 240, 15});
-  EXPECT_EQ(k, robot.intrinsics(320, 240));
-  EXPECT_EQ(k.width_px, 320);
-  int64_t prev = -1;
-  for (int i = 0; i < 10; ++i) {
-    const auto f = bridge.next_frame(milliseconds(100));
-    ASSERT_TRUE(f.has_value());
-    EXPECT_GT(f->t_ns, prev);
-    EXPECT_EQ(f->gray.size(), cv::Size(320, 240));
-    prev = f->t_ns;
-  }
-}
-
-TEST(MockBridge, StopIsSafeFromAnotherThreadAndBeforeConnect) {
-  MockRobot robot(room(), small_fast());
-  MockBridge bridge(robot);
-  bridge.stop();  // never throws, even unconnected
-  bridge.connect();
-  bridge.start_camera({0, 160, 120, 15});
-  bridge.move({0.2, 0, 0});
-  std::thread t([&] { bridge.stop(); });
-  for (int i = 0; i < 3; ++i) bridge.next_frame(milliseconds(10));
-  t.join();
-  EXPECT_TRUE(bridge.log().back().stop_move);
-}
-
-TEST(MockBridge, LockHeadSetsAndReadsBackTheAngles) {
-  MockRobot robot(room(), small_fast());
-  MockBridge bridge(robot);
-  bridge.connect();
-  HeadLockRequest req;
-  req.head_pitch_rad = 0.1;
-  const HeadLockStatus s = bridge.lock_head(req);
-  EXPECT_TRUE(s.holding);
-  EXPECT_NEAR(s.head_pitch_rad, 0.1, 1e-12);
-  req.head_pitch_rad = 1.5;  // beyond the joint limit: cannot hold
-  EXPECT_FALSE(bridge.lock_head(req).holding);
-}
-
-TEST(MockBridge, WifiDropsAndDelaysFrames) {
-  MockRobot robot(room(), small_fast());
-  MockBridgeOptions o;
-  o.wifi.drop_probability = 0.3;
-  o.wifi.delay_s = 0.2;
-  MockBridge bridge(robot, o);
-  bridge.connect();
-  bridge.start_camera({0, 160, 120, 15});
-  int delivered = 0, missing = 0;
-  int64_t prev = -1;
-  for (int i = 0; i < 60; ++i) {
-    const auto f = bridge.next_frame(milliseconds(100));
-    if (!f) {
-      ++missing;
-      continue;
-    }
-    ++delivered;
-    EXPECT_GT(f->t_ns, prev);
-    EXPECT_LE(f->t_ns, robot.now_ns() - 200'000'000);  // at least the transport delay old
-    prev = f->t_ns;
-  }
-  EXPECT_GT(bridge.frames_dropped(), 5);
-  EXPECT_GT(delivered, 25);
-  EXPECT_GT(missing, 5);
-}
-
 TEST(WifiModel, NoDropNoDelayDeliversEveryFrame) {
   WifiModel w;
   for (int i = 0; i < 5; ++i) {
@@ -285,4 +181,4 @@ TEST(WifiModel, NoDropNoDelayDeliversEveryFrame) {
 }
 
 }  // namespace
-}  // namespace pepper::naoqi_bridge::mock
+}  // namespace pepper::sim
