@@ -96,15 +96,20 @@ TEST(Navigator, VanishingFeaturesHoldThenStopWithReason) {
   for (const Frame& f : frames) last = nav.step(f).command;
   ASSERT_FALSE(last.stop);
   const int64_t t_last_good = frames.back().t_ns;
-  const cv::Mat blank(camera().height_px, camera().width_px, CV_8UC1, cv::Scalar(128));
-  std::vector<StepResult> blind;
-  for (int i = 1; i <= 8; ++i) {
-    Frame f;
-    f.gray = blank;
-    f.t_ns = t_last_good + i * 200'000'000LL;
-    f.index = 100 + i;
-    blind.push_back(nav.step(f));
-  }
+  // Eight blank frames, 0.2 s apart, after the last good one.
+  const auto blank_steps = [&](Navigator& n) {
+    const cv::Mat blank(camera().height_px, camera().width_px, CV_8UC1, cv::Scalar(128));
+    std::vector<StepResult> out;
+    for (int i = 1; i <= 8; ++i) {
+      Frame f;
+      f.gray = blank;
+      f.t_ns = t_last_good + i * 200'000'000LL;
+      f.index = 100 + i;
+      out.push_back(n.step(f));
+    }
+    return out;
+  };
+  const std::vector<StepResult> blind = blank_steps(nav);
   // Frames at +0.2 .. +1.0 s: held (identical command, state kHolding).
   for (int i = 0; i < 5; ++i) {
     EXPECT_EQ(blind[i].telemetry.state, NavState::kHolding) << i;
@@ -135,14 +140,7 @@ TEST(Navigator, VanishingFeaturesHoldThenStopWithReason) {
   v.controller = ControllerKind::kVnhv;
   Navigator vnav(tour().map, v);
   for (const Frame& f : frames) vnav.step(f);
-  std::vector<StepResult> vblind;
-  for (int i = 1; i <= 8; ++i) {
-    Frame f;
-    f.gray = blank;
-    f.t_ns = t_last_good + i * 200'000'000LL;
-    f.index = 100 + i;
-    vblind.push_back(vnav.step(f));
-  }
+  const std::vector<StepResult> vblind = blank_steps(vnav);
   EXPECT_TRUE(vblind[7].command.stop);
   EXPECT_EQ(vblind[7].command.reason, StopReason::kFeaturesLost);
   for (const StepResult& b : vblind) EXPECT_LE(std::abs(b.command.omega_rad_s), 0.5);
