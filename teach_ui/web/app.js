@@ -317,7 +317,9 @@
         head === true ? 'ok' : 'warn');
     }
     if ('mode' in patch) {
-      setPill('pill-mode', `mode: ${s.mode || '?'}`, 'mode');
+      // "replay on the mock" is a replay too: the replay panel, with the robot named.
+      const on = s.robot_kind === 'mock' ? ' (simulated robot)' : '';
+      setPill('pill-mode', `mode: ${s.mode || '?'}${on}`, 'mode');
       document.querySelectorAll('.tab').forEach((t) => {
         t.classList.toggle('live', t.dataset.tab === s.mode);
       });

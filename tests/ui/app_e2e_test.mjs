@@ -124,6 +124,13 @@ async function replayStep() {
         { timeoutMs: 30000, what: 'the navigator driving' });
       await expectFramesAdvance(page, 5);
     });
+    await run.step('a replay on the mock robot shows the replay panel and says it is simulated', async () => {
+      // Issue 30: it used to open on the Offline tab with "mode: offline".
+      const pill = await page.textContent('#pill-mode');
+      if (!pill.includes('replay (simulated robot)')) throw new Error(`mode pill: "${pill}"`);
+      if (await page.isHidden('#panel-replay')) throw new Error('the replay panel is hidden');
+      return pill;
+    });
     await run.step('matched lines and points are drawn over the live image', async () => (
       expectOverlayDrawn(page, { need: 'any' })));
     await run.step('frame rate of the live image in the browser (replay)', async () => {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -60,6 +61,24 @@ void check_intrinsics(const core::CameraIntrinsics& map_cam, const core::CameraI
   }
 }
 
+/// The UI's replay.localisation: whether this frame's localisation attempt found the segment,
+/// and else the best candidate against the threshold.
+nlohmann::json localisation_json(const nav::Telemetry& t, const ReplaySessionOptions& options) {
+  const bool ok = t.state != nav::NavState::kNotLocalized && t.state != nav::NavState::kLost;
+  nlohmann::json j = {{"ok", ok}};
+  if (ok) {
+    j["key_index"] = t.in;
+  } else if (t.localization_best >= 0) {
+    j["key_index"] = t.localization_best;
+    j["detail"] = "best candidate, " + std::to_string(t.localization_best_count) + " of " +
+                  std::to_string(options.navigator.initial.rule.min_best_count) +
+                  " verified matches needed";
+  } else {
+    j["detail"] = "no candidate key image";
+  }
+  return j;
+}
+
 std::string replay_state_name(nav::NavState s) {
   switch (s) {
     case nav::NavState::kNotLocalized: return "localising";
@@ -99,7 +118,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
   std::optional<RecordingWriter> writer;
   std::ofstream telemetry;
   try {
-    link.publish_state({{"mode", robot.mock ? "offline" : "replay"},
+    link.publish_state({{"mode", "replay"},
+                        {"robot_kind", robot.mock ? "mock" : "real"},
                         {"connection", {{"robot", "connecting"}, {"head_locked", false}}},
                         {"stop_reason", nullptr}});
     bridge.connect();
@@ -146,6 +166,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     int last_in = -2;
     int64_t last_moving_t_ns = -1;
     int best_candidate = -1, best_candidate_count = 0;  // last localisation attempt's best
+    int64_t last_localising_event_ns = std::numeric_limits<int64_t>::min() / 2;
     nlohmann::json replayed = nlohmann::json::array();
     if (!options.taught_path_m.empty()) {  // constant: sent once, not with every "trajectory"
       nlohmann::json taught = nlohmann::json::array(), taught_keys = nlohmann::json::array();
@@ -215,6 +236,15 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (t.localization_ran) {
         best_candidate = t.localization_best;
         best_candidate_count = t.localization_best_count;
+        // The operator sees the search: once a second while it fails (frame time).
+        const bool failed = t.state == nav::NavState::kNotLocalized || t.state == nav::NavState::kLost;
+        if (failed && frame->t_ns - last_localising_event_ns >= 1'000'000'000) {
+          last_localising_event_ns = frame->t_ns;
+          link.event({{"event", "localising"},
+                      {"best_key_image", best_candidate},
+                      {"verified_matches", best_candidate_count},
+                      {"needed", options.navigator.initial.rule.min_best_count}});
+        }
       }
       const bool stopped_short = c.stop && c.reason != nav::StopReason::kTourComplete;
       const bool gave_up = options.give_up_lost_s > 0 && last_moving_t_ns >= 0 && stopped_short &&
@@ -274,10 +304,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                               {"omega_rad_s", s.omega_rad_s},
                               {"n_lines", s.n_lines},
                               {"n_points", s.n_points}});
-        link.publish_state({{"replay",
-                             {{"state", replay_state_name(t.state)},
-                              {"key_index", t.in},
-                              {"key_count", result.key_image_count}}},
+        nlohmann::json replay_state = {
+            {"state", replay_state_name(t.state)},
+            {"key_index", t.in >= 0 ? nlohmann::json(t.in) : nlohmann::json(nullptr)},
+            {"key_count", result.key_image_count}};
+        if (t.localization_ran) replay_state["localisation"] = localisation_json(t, options);
+        link.publish_state({{"replay", replay_state},
                             {"drive", {{"v_m_s", s.v_m_s}, {"omega_rad_s", s.omega_rad_s}}}});
         if (t.in != last_in) {
           last_in = t.in;

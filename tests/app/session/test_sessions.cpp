@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "naoqi_bridge/mock_bridge.hpp"
@@ -193,7 +194,8 @@ TEST(ReplaySessionSafety, NavigatorStopReasonSendsStop) {
 // waiting with the robot standing still (issue 30); the base never moved.
 TEST(ReplaySessionSafety, NotLocalisedGivesUpWithAdvice) {
   RobotConnection robot = open_robot(kWorld, {});
-  SessionLink link(nullptr, nullptr);
+  std::ostringstream events;
+  SessionLink link(nullptr, &events);
   ReplaySessionOptions o = replay_options();
   o.max_frames = 0;
   o.give_up_not_localised_s = 2.0;
@@ -217,6 +219,19 @@ TEST(ReplaySessionSafety, NotLocalisedGivesUpWithAdvice) {
   EXPECT_LE(n, 33);
   EXPECT_FALSE(ever_moved(*robot.mock));
   EXPECT_TRUE(last_is_stop(*robot.mock));
+  // Meanwhile the operator saw the search, once a second: the best candidate and the threshold.
+  int localising = 0;
+  std::istringstream lines(events.str());
+  for (std::string line; std::getline(lines, line);) {
+    const auto e = nlohmann::json::parse(line, nullptr, false);
+    if (!e.is_object() || e.value("event", "") != "localising") continue;
+    ++localising;
+    EXPECT_EQ(e["best_key_image"], 1);
+    EXPECT_EQ(e["verified_matches"], 7);
+    EXPECT_GT(e["needed"].get<int>(), 7);
+  }
+  EXPECT_GE(localising, 2);
+  EXPECT_LE(localising, 3);
 }
 
 // Stopped for any reason after driving (lost features, overdue segment ...) for longer than the
