@@ -26,8 +26,7 @@ std::vector<std::string> DeviationFilterOptions::validate() const {
   positive(process_sigma_rad, "process_sigma_rad");
   positive(gate_chi2, "gate_chi2");
   check(max_rejections >= 1, "max_rejections", max_rejections, ">= 1");
-  check(max_prediction_ns >= 0, "max_prediction_ns", static_cast<double>(max_prediction_ns),
-        ">= 0");
+  check(max_prediction_s >= 0, "max_prediction_s", max_prediction_s, ">= 0");
   return errors;
 }
 
@@ -116,7 +115,9 @@ DeviationFilter::Correction DeviationFilter::correct(const SegmentDeviation& mea
 }
 
 std::optional<SegmentDeviation> DeviationFilter::estimate(int64_t t_ns) const {
-  if (!started_ || t_ns - last_accepted_t_ns_ > options_.max_prediction_ns) return std::nullopt;
+  if (!started_ || t_ns - last_accepted_t_ns_ > std::llround(options_.max_prediction_s * 1e9)) {
+    return std::nullopt;
+  }
   return SegmentDeviation{y_m_, theta_rad_};
 }
 

@@ -80,7 +80,7 @@ std::vector<std::string> NavigatorOptions::validate() const {
       errors.push_back(os.str());
     }
   };
-  check(hold_ns >= 0, "hold_ns", static_cast<double>(hold_ns), ">= 0");
+  check(hold_s >= 0, "hold_s", hold_s, ">= 0");
   check(min_line_matches >= 1, "min_line_matches", min_line_matches, ">= 1");
   check(min_point_matches >= 1, "min_point_matches", min_point_matches, ">= 1");
   check(min_scale_points >= 3, "min_scale_points", min_scale_points, ">= 3");
@@ -96,8 +96,7 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(turn_feedforward_max_lead_rad >= 0.0, "turn_feedforward_max_lead_rad",
         turn_feedforward_max_lead_rad, ">= 0");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
-  check(segment_overdue_min_ns >= 0, "segment_overdue_min_ns",
-        static_cast<double>(segment_overdue_min_ns), ">= 0");
+  check(segment_overdue_min_s >= 0, "segment_overdue_min_s", segment_overdue_min_s, ">= 0");
   check(scale_quantile > 0.0 && scale_quantile < 1.0, "scale_quantile", scale_quantile,
         "in (0, 1)");
   check(min_scale_lines >= 0, "min_scale_lines", min_scale_lines, ">= 0");
@@ -296,7 +295,7 @@ double Navigator::segment_taught_m() const {
 
 bool Navigator::segment_overdue(int64_t t_ns) const {
   if (options_.segment_overdue_factor <= 0.0 || !switcher_ || !segment_start_t_ns_) return false;
-  const double allowed_ns = std::max(static_cast<double>(options_.segment_overdue_min_ns),
+  const double allowed_ns = std::max(options_.segment_overdue_min_s * 1e9,
                                      options_.segment_overdue_factor * segment_taught_ns());
   return static_cast<double>(t_ns - *segment_start_t_ns_) > allowed_ns;
 }
@@ -774,7 +773,8 @@ StepResult Navigator::step(const Frame& frame) {
   tel.timings.match_ms = ms_since(t0);
   t0 = Clock::now();
   facts.has_demand = demand.has_value();
-  facts.within_hold = has_command_ && frame.t_ns - last_good_t_ns_ <= options_.hold_ns;
+  facts.within_hold =
+      has_command_ && frame.t_ns - last_good_t_ns_ <= std::llround(options_.hold_s * 1e9);
   const Command cmd = take(*decide(Phase::kControl, state_, facts), frame.t_ns, demand, tel);
   tel.timings.control_ms = ms_since(t0);
   remember_tracks(fm);

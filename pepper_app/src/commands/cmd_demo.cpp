@@ -85,7 +85,7 @@ int run_demo(const DemoArgs& args) {
     to.config_json = config_to_json(config).dump();
     to.scripted = true;
     to.max_distance_m = a.max_distance_m;
-    to.frame_timeout_ms = config.robot.frame_timeout_ms;
+    to.frame_timeout_ms = config.robot.frame_timeout_ms();
     if (ui) to.pace_hz = 2.0 * config.robot.camera_fps;  // watchable, still quick
     const TeachResult taught = run_teach_session(teach_robot, to, link);
     for (const auto& w : taught.warnings) std::cerr << "  warning: " << w << "\n";
@@ -110,7 +110,7 @@ int run_demo(const DemoArgs& args) {
     ro.camera = to.camera;
     ro.head = to.head;
     ro.navigator = config.navigator_options();
-    ro.frame_timeout_ms = config.robot.frame_timeout_ms;
+    ro.frame_timeout_ms = config.robot.frame_timeout_ms();
     ro.telemetry_jsonl = out / "replay.jsonl";
     ro.config_json = to.config_json;
     ro.taught_path_m = taught.path_m;

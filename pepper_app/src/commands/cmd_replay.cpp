@@ -78,7 +78,7 @@ int run_replay(const ReplayArgs& a) {
     }
     o.head = head_request(config);
     o.navigator = config.navigator_options();
-    o.frame_timeout_ms = config.robot.frame_timeout_ms;
+    o.frame_timeout_ms = config.robot.frame_timeout_ms();
     o.max_frames = a.max_frames;
     o.give_up_lost_s = config.replay.give_up_lost_s;
     o.give_up_not_localised_s = config.replay.give_up_not_localised_s;

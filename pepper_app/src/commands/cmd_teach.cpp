@@ -93,7 +93,7 @@ int run_teach(const TeachArgs& a) {
     o.scripted = a.scripted || (robot.mock && !a.manual && !ui_wanted);
     o.max_distance_m = a.max_distance_m;
     o.max_frames = a.max_frames;
-    o.frame_timeout_ms = config.robot.frame_timeout_ms;
+    o.frame_timeout_ms = config.robot.frame_timeout_ms();
     o.max_v_m_s = config.ui.max_v_m_s;
     o.max_omega_rad_s = config.ui.max_omega_rad_s;
     // A simulated robot runs in lockstep; with an operator, pace it at the camera rate.

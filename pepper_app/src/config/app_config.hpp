@@ -18,6 +18,7 @@
 // ranges are checked from that table, then the core's validate() functions check the rules
 // between fields, before anything moves (STYLE.md 2.5).
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -40,8 +41,11 @@ struct RobotConfig {
   int camera_fps = 15;
   double head_pitch_rad = 0.0;  ///< 0 = optical axis horizontal (METHOD.md assumes it)
   double head_yaw_rad = 0.0;
-  int watchdog_ms = 300;         ///< bridge stops the base without a fresh command this long
-  int frame_timeout_ms = 1000;   ///< session stops the base when no frame comes this long
+  double watchdog_s = 0.3;       ///< bridge stops the base without a fresh command this long
+  double frame_timeout_s = 1.0;  ///< session stops the base when no frame comes this long
+  /// The two as whole milliseconds, as the sessions and the bridge take them.
+  int watchdog_ms() const { return static_cast<int>(std::lround(watchdog_s * 1e3)); }
+  int frame_timeout_ms() const { return static_cast<int>(std::lround(frame_timeout_s * 1e3)); }
   std::string user;              ///< login user for tcps:// (NAOqi 2.9: "nao"); password never here
   /// The rule between fields (640x480 or 320x240); each field's range is in the table.
   std::vector<std::string> validate() const;

@@ -33,8 +33,8 @@ RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const A
   RobotConnectOptions o;
   o.user = args.user.empty() ? config.robot.user : args.user;
   o.password_file = args.password_file;
-  o.watchdog_ms = config.robot.watchdog_ms;
-  o.frame_stall_ms = config.robot.frame_timeout_ms;
+  o.watchdog_ms = config.robot.watchdog_ms();
+  o.frame_stall_ms = config.robot.frame_timeout_ms();
   o.mock_frame_rate_hz = config.robot.camera_fps;
   return o;
 }

@@ -27,7 +27,7 @@ TEST(DeviationFilter, NoEstimateBeforeTheFirstMeasurement) {
 TEST(DeviationFilter, PredictionIntegratesTheUnicycle) {
   DeviationFilter f;
   f.correct({0.1, 0.2}, 0);
-  // Straight at 0.2 m/s for 14 frames (within max_prediction_ns): y grows by 0.2 sin(0.2) t.
+  // Straight at 0.2 m/s for 14 frames (within max_prediction_s): y grows by 0.2 sin(0.2) t.
   int64_t t = 0;
   for (int i = 0; i < 14; ++i) f.predict(0.2, 0.0, t += kFrameNs);
   auto e = f.estimate(t);
@@ -135,7 +135,7 @@ TEST(DeviationFilter, GatesOutliersAndRestartsWhenTheyPersist) {
 
 TEST(DeviationFilter, PredictionAloneExpires) {
   DeviationFilterOptions o;
-  o.max_prediction_ns = 500'000'000;
+  o.max_prediction_s = 0.5;
   DeviationFilter f(o);
   f.correct({0.0, 0.0}, 0);
   f.predict(0.15, 0.0, 500'000'000);

@@ -1,6 +1,6 @@
 // Navigator on synthetic rendered tours (test_world.hpp): replaying the taught frames walks the
 // key images in order to the end and stops there; same frames give bit-identical commands;
-// vanishing features hold the last command for hold_ns of frame time, then stop with a reason.
+// vanishing features hold the last command for hold_s of frame time, then stop with a reason.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -89,7 +89,7 @@ TEST(Navigator, SameFramesGiveIdenticalCommands) {
 TEST(Navigator, VanishingFeaturesHoldThenStopWithReason) {
   NavigatorOptions o;
   o.controller = ControllerKind::kIbvs;
-  o.hold_ns = 1'000'000'000;  // 1 s = 5 frames at 5 Hz
+  o.hold_s = 1.0;  // 5 frames at 5 Hz
   Navigator nav(tour().map, o);
   std::vector<Frame> frames(tour().frames.begin(), tour().frames.begin() + 10);
   Command last;
@@ -152,7 +152,7 @@ TEST(Navigator, StopsForGoodWhenASegmentIsOverdue) {
   // stops and stays stopped even though it still sees its features.
   NavigatorOptions o;
   o.segment_overdue_factor = 0.5;  // the test tour's segments last several seconds
-  o.segment_overdue_min_ns = 3'000'000'000;  // 3 s
+  o.segment_overdue_min_s = 3.0;
   Navigator nav(tour().map, o);
   const Frame& view = tour().frames[5];
   std::vector<StepResult> out;
@@ -208,7 +208,7 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
     o.controller = ControllerKind::kIbvs;  // the hold's timing below is the IBVS law's
     o.arrival_scale_ratio = 1.9;  // never reached: only the fade rule can complete the tour
     o.arrival_fade_ratio = fade_ratio;
-    o.hold_ns = 600'000'000;
+    o.hold_s = 0.6;
     Navigator nav(tour().map, o);
     std::vector<StepResult> out;
     for (const Frame& f : tour().frames) out.push_back(nav.step(f));
@@ -486,7 +486,7 @@ TEST(Navigator, ContractViolationsThrow) {
   nav.step(tour().frames[5]);
   EXPECT_THROW(nav.step(tour().frames[4]), std::invalid_argument);  // time goes backwards
   NavigatorOptions bad;
-  bad.hold_ns = -1;
+  bad.hold_s = -1;
   EXPECT_THROW(Navigator(tour().map, bad), std::invalid_argument);
 }
 

@@ -8,7 +8,7 @@
 //    (chi-square, 2 dof). A filter that keeps rejecting is more likely wrong than the
 //    measurements: after max_rejections consecutive rejections it restarts on the measurement.
 //  - estimate: nullopt before the first measurement and when no measurement was accepted for
-//    longer than max_prediction_ns (the caller then uses another law).
+//    longer than max_prediction_s (the caller then uses another law).
 // Time is the frames' t_ns (deterministic; no wall clock). Not thread-safe: one per navigator.
 
 #include <cstdint>
@@ -28,7 +28,7 @@ struct DeviationFilterOptions {
   double process_sigma_rad = 0.03;      ///< heading drift of the prediction, rad / sqrt(s), > 0
   double gate_chi2 = 13.8;              ///< innovation gate, chi-square 2 dof (99.9 %), > 0
   int max_rejections = 5;               ///< consecutive rejections before a restart, >= 1
-  int64_t max_prediction_ns = 1'000'000'000;  ///< prediction-only validity, ns, >= 0
+  double max_prediction_s = 1.0;  ///< prediction-only validity (frame time), s, >= 0
   std::vector<std::string> validate() const;
 };
 

@@ -9,7 +9,7 @@
 //                  command: stop (reason kNotLocalized) until it succeeds.
 //   kNavigating    segment (IP, IN, INN) known: counts for switching, control law, command.
 //   kHolding       the control law has no usable feature (too few verified matches with IN):
-//                  the last command is held for at most `hold_ns` (measured with frame stamps).
+//                  the last command is held for at most `hold_s` (measured with frame stamps).
 //   kLost          the hold expired: command stop (reason kFeaturesLost) and relocalise over the
 //                  whole map on each frame; back to kNavigating when that succeeds.
 //   kTourComplete  IN was the final image and arrival was seen (key_image_logic.hpp): stop
@@ -76,7 +76,7 @@ struct NavigatorOptions {
   features::FeatureExtractorOptions extractor;
   features::MatcherOptions matcher;
   /// How long the last command is held when features vanish, ns of frame time, >= 0.
-  int64_t hold_ns = 1'000'000'000;
+  double hold_s = 1.0;
   /// Fewer verified line matches with IN than this: the line modality is absent. >= 1.
   int min_line_matches = 3;
   /// Fewer verified point matches with IN than this: the point modality is absent. >= 1.
@@ -127,7 +127,7 @@ struct NavigatorOptions {
   /// into the lab shelf. 0: off, else in (0, 2).
   double arrival_fade_ratio = 0.95;
   /// Overdue segment: stop for good when no switch happened for longer than
-  /// max(segment_overdue_min_ns, segment_overdue_factor * (t_ns of IN - t_ns of IP in the map)),
+  /// max(segment_overdue_min_s, segment_overdue_factor * (t_ns of IN - t_ns of IP in the map)),
   /// frame time. Why: with too few features to switch or to see arrival (measured: the end of
   /// worlds/white_corridor.yaml before it got an end door) the robot drove on with the last
   /// segment's command, towards the wall 5 m further, until the evaluation cut it off.
@@ -182,7 +182,7 @@ struct NavigatorOptions {
   /// (17.2 cm inside; 16.0 with these frames counted). 0: no cap. >= 0, rad.
   double turn_feedforward_max_lead_rad = 0.1;
   double segment_overdue_factor = 6.0;
-  int64_t segment_overdue_min_ns = 20'000'000'000;
+  double segment_overdue_min_s = 20.0;
   std::vector<std::string> validate() const;
 };
 

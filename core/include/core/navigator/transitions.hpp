@@ -28,7 +28,7 @@ struct StepFacts {
   bool switched = false;       ///< the switcher advanced IP <- IN <- INN
   bool overdue = false;        ///< the segment lasted longer than segment_overdue_* allow
   bool has_demand = false;     ///< a control law produced a yaw-rate demand
-  bool within_hold = false;    ///< an earlier command exists, younger than hold_ns
+  bool within_hold = false;    ///< an earlier command exists, younger than hold_s
 };
 
 enum class Phase { kEntry, kLocalise, kSegment, kControl };
