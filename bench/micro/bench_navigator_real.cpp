@@ -8,7 +8,8 @@
 //   Frames, one pass (66 frames, t_ns 1/3 s apart so that the pass takes the taught time): for
 //   i = 0..21, Edge_01 image i twice, then Edge_10 image 12 - (12 * i) / 21 in name order, i.e.
 //   the opposite-direction route walked backwards so that each clutter frame shows roughly the
-//   same place seen the other way (Edge_01 image i = 01/.., Edge_10 image = 10/..):
+//   same place seen the other way ("00001 x2, 10/03246": Edge_01/img_00001.png twice, then
+//   Edge_10/img_03246.png):
 //     00001 x2, 10/03246; 00004 x2, 10/03246; 00014 x2, 10/03243; 00024 x2, 10/03243;
 //     00032 x2, 10/03238; 00040 x2, 10/03238; 00046 x2, 10/03233; 00051 x2, 10/03226;
 //     00056 x2, 10/03226; 00063 x2, 10/03219; 00069 x2, 10/03219; 00076 x2, 10/03214;
