@@ -56,6 +56,15 @@ nav::StepResult driving_step(const core::Frame& f) {
   return r;
 }
 
+/// Drives for `frames` frames, then stops for lost features on every frame (counts in `n`).
+StepFunction drives_then_loses(int frames, int& n) {
+  return [frames, &n](const core::Frame& f) {
+    nav::StepResult s = driving_step(f);
+    if (++n > frames) s.command = {0.0, 0.0, true, nav::StopReason::kFeaturesLost};
+    return s;
+  };
+}
+
 bool last_is_stop(const sim::MockRobot& robot) {
   const auto log = robot.command_log();
   if (log.empty()) return false;
@@ -179,11 +188,7 @@ TEST(ReplaySessionSafety, NavigatorStopReasonSendsStop) {
   ReplaySessionOptions o = replay_options();
   o.max_frames = 12;
   const ReplayResult r =
-      run_replay_session(robot, dummy_map(robot), o, link, [&](const core::Frame& f) {
-        nav::StepResult s = driving_step(f);
-        if (++n > 5) s.command = {0.0, 0.0, true, nav::StopReason::kFeaturesLost};
-        return s;
-      });
+      run_replay_session(robot, dummy_map(robot), o, link, drives_then_loses(5, n));
   EXPECT_EQ(r.outcome, "max_frames");
   const auto log = robot.mock->command_log();
   ASSERT_GE(log.size(), 6u);
@@ -244,11 +249,7 @@ TEST(ReplaySessionSafety, StoppedAfterDrivingGivesUp) {
   o.give_up_lost_s = 1.0;
   int n = 0;
   const ReplayResult r =
-      run_replay_session(robot, dummy_map(robot), o, link, [&](const core::Frame& f) {
-        nav::StepResult s = driving_step(f);
-        if (++n > 10) s.command = {0.0, 0.0, true, nav::StopReason::kFeaturesLost};
-        return s;
-      });
+      run_replay_session(robot, dummy_map(robot), o, link, drives_then_loses(10, n));
   EXPECT_EQ(r.outcome, "lost");
   EXPECT_NE(r.detail.find("features_lost"), std::string::npos) << r.detail;
   EXPECT_GE(n, 10 + 15);
