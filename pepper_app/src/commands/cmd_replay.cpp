@@ -26,7 +26,7 @@ struct ReplayArgs {
   int64_t max_frames = 0;
   int mock_start = -1;
   uint64_t seed = 1;
-  std::string mock_lighting = "replay";
+  std::string mock_lighting;  ///< empty: "replay" with --mock-start, else the robot's own
   bool wait_start = false;
   std::string mock_command_log;
 };
@@ -55,7 +55,8 @@ int run_replay(const ReplayArgs& a) {
       evaluation::EvaluationOptions eo;
       eo.seed = a.seed;
       evaluation::MockReplaySetup setup = evaluation::mock_replay_setup(
-          robot.mock->world(), a.mock_start, a.mock_lighting, eo);
+          robot.mock->world(), a.mock_start, a.mock_lighting.empty() ? "replay" : a.mock_lighting,
+          eo);
       setup.robot.frame_rate_hz = connect.mock_frame_rate_hz;
       setup.bridge.description = robot.url.url;
       const RobotUrl url = robot.url;
@@ -176,8 +177,8 @@ void register_replay_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--mock-lighting", args->mock_lighting,
                   "mock: robots: the world's lighting condition to replay under (teach, replay, "
-                  "... as the world file names them)")
-      ->capture_default_str();
+                  "... as the world file names them; default: replay with --mock-start, else "
+                  "teach)");
   cmd->add_flag("--wait-start", args->wait_start, "Wait for the UI's start-replay button");
   cmd->add_option("--mock-command-log", args->mock_command_log,
                   "mock: robots: write every base command received as JSON lines here");

@@ -169,10 +169,11 @@ sim::Pose2D replay_start_pose(const sim::World& world, int k, const EvaluationOp
   return world.scenario.start_pose();
 }
 
-MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const std::string& lighting,
-                                  const EvaluationOptions& options) {
-  MockReplaySetup setup;
-  setup.start = replay_start_pose(start_world, k, options);
+namespace {
+
+/// Run k's simulated robot and WiFi link (everything of MockReplaySetup but the start pose).
+void set_run_options(MockReplaySetup& setup, int k, const std::string& lighting,
+                     const EvaluationOptions& options) {
   setup.robot.lighting = lighting;
   setup.robot.render.noise_seed = options.seed * 1000 + static_cast<uint64_t>(k) + 1;
   if (options.disturbances.count(Disturbance::kLatency)) {
@@ -182,6 +183,15 @@ MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const st
     setup.bridge.wifi.drop_probability = options.disturbance.drop_probability;
     setup.bridge.wifi.seed = options.seed * 7 + static_cast<uint64_t>(k);
   }
+}
+
+}  // namespace
+
+MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const std::string& lighting,
+                                  const EvaluationOptions& options) {
+  MockReplaySetup setup;
+  setup.start = replay_start_pose(start_world, k, options);
+  set_run_options(setup, k, lighting, options);
   return setup;
 }
 
@@ -332,7 +342,8 @@ RunResult replay_run(const TeachResult& teach,
                      const std::string& lighting, const sim::Pose2D& start, int k,
                      const EvaluationOptions& options) {
   const auto wall0 = Clock::now();
-  MockReplaySetup setup = mock_replay_setup(*replay_world, k, lighting, options);
+  MockReplaySetup setup;  // the start is the caller's (drawn in the undisturbed world)
+  set_run_options(setup, k, lighting, options);
   RobotConnection robot = open_mock_robot(replay_world, setup.robot, setup.bridge);
   robot.mock->place(start);
 
@@ -367,9 +378,6 @@ RunResult replay_run(const TeachResult& teach,
   r.tour_complete = replayed.tour_complete;
   if (replayed.tour_complete) {
     monitor.settle();
-  } else if (replayed.outcome == "not_localised" || replayed.outcome == "lost") {
-    r.outcome = replayed.outcome;
-    r.detail = replayed.detail;
   } else {
     r.outcome = replayed.outcome;
     r.detail = replayed.error.empty() ? replayed.detail : replayed.error;

@@ -63,8 +63,12 @@ void check_intrinsics(const core::CameraIntrinsics& map_cam, const core::CameraI
 
 /// The UI's replay.localisation: whether this frame's localisation attempt found the segment,
 /// and else the best candidate against the threshold.
+bool has_segment(const nav::Telemetry& t) {
+  return t.state != nav::NavState::kNotLocalized && t.state != nav::NavState::kLost;
+}
+
 nlohmann::json localisation_json(const nav::Telemetry& t, const ReplaySessionOptions& options) {
-  const bool ok = t.state != nav::NavState::kNotLocalized && t.state != nav::NavState::kLost;
+  const bool ok = has_segment(t);
   nlohmann::json j = {{"ok", ok}};
   if (ok) {
     j["key_index"] = t.in;
@@ -237,8 +241,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         best_candidate = t.localization_best;
         best_candidate_count = t.localization_best_count;
         // The operator sees the search: once a second while it fails (frame time).
-        const bool failed = t.state == nav::NavState::kNotLocalized || t.state == nav::NavState::kLost;
-        if (failed && frame->t_ns - last_localising_event_ns >= 1'000'000'000) {
+        if (!has_segment(t) && frame->t_ns - last_localising_event_ns >= 1'000'000'000) {
           last_localising_event_ns = frame->t_ns;
           link.event({{"event", "localising"},
                       {"best_key_image", best_candidate},
