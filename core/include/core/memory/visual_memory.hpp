@@ -35,6 +35,7 @@
 
 #include "core/camera/intrinsics.hpp"
 #include "core/features/image_features.hpp"
+#include "core/odometry.hpp"
 
 namespace pepper::core::memory {
 
@@ -48,6 +49,9 @@ struct KeyImage {
   /// commanded during teach (mapping/drive_odometer.hpp); NaN when unknown (a map taught from
   /// plain images, or saved before the field existed). Never decreases along the tour.
   double travelled_m = std::numeric_limits<double>::quiet_NaN();
+  /// The robot's odometry when the image was taken (core/odometry.hpp, teach's odometry frame);
+  /// nullopt when unknown (a map taught without odometry, or saved before the field existed).
+  std::optional<OdometryPose> odom;
   features::ImageFeatures features;  ///< includes the grey image
 };
 
