@@ -98,7 +98,8 @@ std::vector<int> prefilter_votes(const features::ImageFeatures& current,
 
 InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
                                           const memory::VisualMemory& map,
-                                          const InitialLocalizerOptions& options) {
+                                          const InitialLocalizerOptions& options,
+                                          std::span<const int> expected) {
   if (const auto errors = options.validate(); !errors.empty()) {
     throw std::invalid_argument("localize_in_map: " + errors.front());
   }
@@ -121,6 +122,7 @@ InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
     if (report.votes[order[r]] <= 0 && r > 0) break;  // nothing in common with the rest
     verify(order[r]);
   }
+  for (const int k : expected) verify(k);
   const int best = static_cast<int>(std::max_element(report.counts.begin(), report.counts.end()) -
                                     report.counts.begin());
   verify(best - 1);

@@ -131,9 +131,12 @@ bool passed_next(const SwitchCounts& c, const SwitcherOptions& o) {
 bool passed_by_distance(const SwitchCounts& c, const SwitcherOptions&) {
   return c.passed_by_distance;
 }
+bool passed_by_odometry(const SwitchCounts& c, const SwitcherOptions&) {
+  return c.passed_by_odometry;
+}
 
 // clang-format off
-const std::array<SwitchRule, 5> kSwitchRules{{
+const std::array<SwitchRule, 6> kSwitchRules{{
   {"three views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kThreeView),
    three_view_rule, "nL + nP (Ia, IN, INN) > nL + nP (IP, Ia, IN) (METHOD.md)"},
   {"two views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kTwoView), two_view_rule,
@@ -150,6 +153,10 @@ const std::array<SwitchRule, 5> kSwitchRules{{
   {"passed IN by distance", Kind::kAddition, "navigator.blind_passed_driven_factor",
    kCriterionPassedByDistance, passed_by_distance,
    "scale unknown and the commands drove well past the taught length (a bare wall)"},
+  {"passed IN by odometry", Kind::kAddition,
+   "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
+   kCriterionPassedByOdometry, passed_by_odometry,
+   "scale unknown and the robot's odometry, carried along the taught path, is past IN"},
 }};
 // clang-format on
 

@@ -41,6 +41,8 @@ const char* to_string(NavState s) {
       return "tour_complete";
     case NavState::kOverdue:
       return "overdue";
+    case NavState::kDeadReckoning:
+      return "dead_reckoning";
   }
   return "unknown";
 }
@@ -103,6 +105,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_scale_pairs >= 1, "min_scale_pairs", min_scale_pairs, ">= 1");
   check(scale_line_max_angle_rad > 0.0 && scale_line_max_angle_rad <= 0.5,
         "scale_line_max_angle_rad", scale_line_max_angle_rad, "in (0, 0.5]");
+  check(dead_reckoning_max_m > 0.0, "dead_reckoning_max_m", dead_reckoning_max_m, "> 0");
+  check(dead_reckoning_max_rad > 0.0, "dead_reckoning_max_rad", dead_reckoning_max_rad, "> 0");
   check(min_point_texture >= 0.0, "min_point_texture", min_point_texture, ">= 0");
   check(arrival_scale_ratio > 0.0 && arrival_scale_ratio < 2.0, "arrival_scale_ratio",
         arrival_scale_ratio, "in (0, 2)");
@@ -185,6 +189,21 @@ PointSets point_sets(const features::TwoViewMatches& m, const cv::Mat& gray = cv
   return s;
 }
 
+std::vector<std::optional<OdometryPose>> taught_odometry(const memory::VisualMemory& map) {
+  std::vector<std::optional<OdometryPose>> out;
+  for (const memory::KeyImage& k : map.key_images) out.push_back(k.odom);
+  return out;
+}
+
+// A vision fix moves the odometry estimate this far towards itself (1: all the way). Half: one
+// fix's noise (a few cm laterally, more along the segment) is halved, and two or three located
+// frames remove the drift of a dead-reckoned turn.
+constexpr double kFixGain = 0.5;
+// Turning on the spot on odometry: yaw rate per radian still to turn, 1/s; and the heading error
+// (rad) beyond which the robot turns on the spot before driving on.
+constexpr double kTurnGain_1_s = 1.5;
+constexpr double kTurnFirstRad = 0.5;
+
 // IN-side corner index and normalised coordinates of KLT tracks from IN (view a) into another
 // image (view b), for the VNHV segment pose (control/segment_pose.hpp).
 std::vector<control::CornerObservation> corner_observations(const features::TwoViewMatches& m) {
@@ -201,7 +220,8 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
       options_(options),
       extractor_(map_.camera, options.extractor),
       schedule_(options.schedule),
-      vnhv_filter_(options.vnhv.filter) {
+      vnhv_filter_(options.vnhv.filter),
+      tracker_(taught_odometry(map_)) {
   options_.ibvs.mode = options_.features;
   options_.matcher = matcher_for(options_.features, options_.matcher);
   if (const auto errors = options_.validate(); !errors.empty()) {
@@ -225,6 +245,9 @@ void Navigator::reset() {
   segment_turned_rad_ = 0.0;
   final_ratio_in_ = -1;
   klt_priors_.clear();
+  tracker_.reset();
+  odom_.reset();
+  blind_m_ = blind_rad_ = 0.0;
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -313,8 +336,16 @@ void Navigator::remember_tracks(const features::FrameMatcher& fm) {
 
 bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
   const auto t0 = Clock::now();
+  // After a loss, odometry along the taught path says where the robot should be: those key
+  // images are verified whatever the appearance vote ranks first.
+  std::vector<int> expected;
+  if (odom_ && tracker_.usable()) {
+    if (const auto d = tracker_.deviation()) {
+      for (int k = d->piece - 1; k <= d->piece + 2; ++k) expected.push_back(k);
+    }
+  }
   const localization::InitialLocalizationReport report =
-      localization::localize_in_map(fm, map_, options_.initial);
+      localization::localize_in_map(fm, map_, options_.initial, expected);
   tel.localization_ran = true;
   tel.localization_best = report.result.best;
   tel.localization_best_count = report.result.best_count;
@@ -322,6 +353,18 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
   if (report.result.segment) {
     switcher_.emplace(*report.result.segment, static_cast<int>(map_.key_images.size()),
                       options_.switching);
+    // The robot is near the best key image. An odometry estimate carried from before (a loss)
+    // is kept where it agrees; otherwise it starts at that image's taught pose.
+    if (odom_ && tracker_.usable() && report.result.best >= 0) {
+      const OdometryPose& best = tracker_.taught(report.result.best);
+      const auto& X = tracker_.estimate();
+      constexpr double kAgreeM = 1.0;
+      if (!X || std::hypot(X->x_m - best.x_m, X->y_m - best.y_m) > kAgreeM) {
+        tracker_.set(best, *odom_, report.result.segment->prev);
+      } else {
+        tracker_.set(*X, *odom_, report.result.segment->prev);
+      }
+    }
     schedule_.reset();
     has_command_ = false;
   }
@@ -512,6 +555,13 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       dev->lateral_m *= vnhv_m_per_unit_;  // segment units -> m
       vnhv_filter_.correct(*dev, tel.t_ns);
     }
+    if (odom_ && tracker_.usable()) {
+      // The fix is the robot's pose in IN's frame, in segment units: in metres, from IN's taught
+      // pose, it is where the robot is on the taught path.
+      const OdometryPose in_next{fix->pose.x_m * vnhv_m_per_unit_,
+                                 fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
+      fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), kFixGain);
+    }
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
   if (!est) return std::nullopt;
@@ -589,6 +639,14 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
     counts.next_scale_ratio = *ratio;
     tel.next_scale_ratio = *ratio;
   }
+  // Odometry along the taught path (when the frame and the map have it): past IN?
+  std::optional<double> odom_progress;
+  if (odom_ && tracker_.usable()) {
+    if (const auto d = tracker_.deviation()) odom_progress = d->progress;
+  }
+  if (odom_progress) tel.odom_progress = *odom_progress;
+  const bool odom_passed_next = odom_progress && *odom_progress >= seg.next;
+  counts.passed_by_odometry = odom_passed_next && std::isnan(counts.next_scale_ratio);
   if (seg.next_next && options_.blind_passed_driven_factor > 0.0 && segment_from_switch_ &&
       std::isnan(counts.next_scale_ratio)) {
     counts.passed_by_distance =
@@ -630,7 +688,11 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
     if (!std::isnan(ratio) && !(ratio <= final_best_ratio_)) final_best_ratio_ = ratio;
     const bool faded = options_.arrival_fade_ratio > 0.0 && std::isnan(ratio) &&
                        final_best_ratio_ >= options_.arrival_fade_ratio;  // NaN: false
-    ev.reached_final = ratio >= options_.arrival_scale_ratio || faded;  // NaN: false
+    // Dead reckoning onto the final image's taught pose is arrival too: nothing else would stop
+    // the robot there.
+    const bool dead_reckoned_there = state_ == NavState::kDeadReckoning && odom_passed_next;
+    ev.reached_final =
+        ratio >= options_.arrival_scale_ratio || faded || dead_reckoned_there;  // NaN: false
   }
   return ev;
 }
@@ -669,6 +731,7 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
 
 Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double> demand,
                         Telemetry& tel) {
+  const NavState before = state_;
   if (!t.keeps_state) state_ = t.to;
   switch (t.action) {
     case Action::kStopTourComplete:
@@ -689,6 +752,7 @@ Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double>
       } else {
         ensure_pyramids(switcher_->segment());
         begin_segment(t_ns, /*from_switch=*/true);
+        tracker_.advance_to(switcher_->segment().prev);
       }
       return {};
     case Action::kContinue:
@@ -705,14 +769,32 @@ Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double>
       last_command_ = cmd;
       last_good_t_ns_ = t_ns;
       has_command_ = true;
+      if (before == NavState::kDeadReckoning) {
+        tel.reacquired = true;
+        tel.dead_reckoned_m = blind_m_;
+        tel.dead_reckoned_rad = blind_rad_;
+        if (fix_correction_) {
+          tel.drift_corrected_m = fix_correction_->first;
+          tel.drift_corrected_rad = fix_correction_->second;
+        }
+      }
+      blind_m_ = blind_rad_ = 0.0;
       return cmd;
     }
+    case Action::kDeadReckon:
+      if (before != NavState::kDeadReckoning) blind_m_ = blind_rad_ = 0.0;
+      return dead_reckon(t_ns, tel);
     case Action::kHold:
       tel.hold_elapsed_ns = t_ns - last_good_t_ns_;
       tel.turning = schedule_.turning();
       return last_command_;
     case Action::kLose:
       tel.hold_elapsed_ns = has_command_ ? t_ns - last_good_t_ns_ : 0;
+      if (before == NavState::kDeadReckoning) {
+        tel.dead_reckoned_m = blind_m_;
+        tel.dead_reckoned_rad = blind_rad_;
+      }
+      blind_m_ = blind_rad_ = 0.0;
       schedule_.reset();
       has_command_ = false;
       vnhv_segment_next_ = -1;
@@ -721,12 +803,68 @@ Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double>
   return stop_command(StopReason::kFeaturesLost);
 }
 
+void Navigator::follow_odometry(const Frame& frame) {
+  fix_correction_.reset();
+  if (!frame.odom) {
+    // A frame without odometry: no dead reckoning on it; the next reading carries the estimate
+    // over the gap (odometry is a pose, not an increment).
+    odom_.reset();
+    return;
+  }
+  if (state_ == NavState::kDeadReckoning && odom_) {
+    const OdometryPose d = between(*odom_, *frame.odom);
+    blind_m_ += std::hypot(d.x_m, d.y_m);
+    blind_rad_ += std::abs(d.yaw_rad);
+  }
+  tracker_.predict(*frame.odom);
+  odom_ = frame.odom;
+}
+
+bool Navigator::can_dead_reckon() const {
+  return odom_ && tracker_.usable() && tracker_.estimate() && switcher_ &&
+         blind_m_ < options_.dead_reckoning_max_m && blind_rad_ < options_.dead_reckoning_max_rad;
+}
+
+Command Navigator::dead_reckon(int64_t t_ns, Telemetry& tel) {
+  const PathDeviation d = *tracker_.deviation();
+  const double max_omega = options_.schedule.max_omega_rad_s;
+  double demand = 0.0;
+  bool on_the_spot = d.in_place;
+  if (d.in_place) {
+    demand = kTurnGain_1_s * d.remaining_turn_rad;
+  } else if (std::abs(d.heading_rad) > kTurnFirstRad) {
+    on_the_spot = true;  // facing well off the path (past a turn): turn back to it first
+    demand = -kTurnGain_1_s * d.heading_rad;
+  } else {
+    const double v = has_command_ && last_command_.v_m_s > 0.0 ? last_command_.v_m_s
+                                                               : options_.schedule.v_turn_m_s;
+    const auto w = control::vnhv_omega(v, d.lateral_m, d.heading_rad, options_.vnhv,
+                                       d.curvature_1_m);
+    demand = w ? *w : -kTurnGain_1_s * d.heading_rad;
+  }
+  demand = std::clamp(demand, -max_omega, max_omega);
+  tel.omega_demand_rad_s = demand;
+  const control::BaseCommand b = schedule_.step(demand, t_ns);
+  Command cmd;
+  cmd.v_m_s = on_the_spot ? 0.0 : b.v_m_s;
+  cmd.omega_rad_s = b.omega_rad_s;
+  cmd.stop = false;
+  cmd.reason = StopReason::kNone;
+  tel.turning = b.turning;
+  tel.dead_reckoned_m = blind_m_;
+  tel.dead_reckoned_rad = blind_rad_;
+  last_command_ = cmd;
+  has_command_ = true;
+  return cmd;
+}
+
 // One frame: a pipeline of stages, with the decisions taken from the transition table
 // (transitions.hpp) at four points. docs/method/navigator.md "One frame".
 StepResult Navigator::step(const Frame& frame) {
   const auto t_start = Clock::now();
   check_frame(frame);
   account_commanded_motion(frame.t_ns);
+  follow_odometry(frame);
   StepResult out;
   Telemetry& tel = out.telemetry;
   tel.t_ns = frame.t_ns;
@@ -775,6 +913,7 @@ StepResult Navigator::step(const Frame& frame) {
   facts.has_demand = demand.has_value();
   facts.within_hold =
       has_command_ && frame.t_ns - last_good_t_ns_ <= std::llround(options_.hold_s * 1e9);
+  facts.can_dead_reckon = !demand && can_dead_reckon();
   const Command cmd = take(*decide(Phase::kControl, state_, facts), frame.t_ns, demand, tel);
   tel.timings.control_ms = ms_since(t0);
   remember_tracks(fm);

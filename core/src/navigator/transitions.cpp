@@ -18,11 +18,13 @@ bool switched(const StepFacts& f) { return f.switched; }
 bool overdue(const StepFacts& f) { return f.overdue; }
 bool has_demand(const StepFacts& f) { return f.has_demand; }
 bool within_hold(const StepFacts& f) { return f.within_hold; }
+bool can_dead_reckon(const StepFacts& f) { return f.can_dead_reckon; }
 
-constexpr StateSet kNavigatingOrHolding = states_of({S::kNavigating, S::kHolding});
+constexpr StateSet kNavigatingOrHolding =
+    states_of({S::kNavigating, S::kHolding, S::kDeadReckoning});
 
 // clang-format off
-const std::array<Transition, 12> kTable{{
+const std::array<Transition, 13> kTable{{
   // Entry: terminal states stay stopped, nothing else runs.
   {Phase::kEntry, states_of({S::kTourComplete}), "always", "", always,
    Action::kStopTourComplete, S::kTourComplete, false,
@@ -60,19 +62,25 @@ const std::array<Transition, 12> kTable{{
   {Phase::kControl, kNavigatingOrHolding, "demand", "navigator.controller", has_demand,
    Action::kDrive, S::kNavigating, false,
    "the law's yaw rate through the velocity schedule (speed, turn slow-down, limits)"},
+  {Phase::kControl, kNavigatingOrHolding, "odometry on the taught path",
+   "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad", can_dead_reckon,
+   Action::kDeadReckon, S::kDeadReckoning, false,
+   "vision sees too little (a blank wall in a turn): drive the taught path on odometry until "
+   "the key images are matched again, within a bounded distance and turn"},
   {Phase::kControl, kNavigatingOrHolding, "within hold", "navigator.hold_s", within_hold,
    Action::kHold, S::kHolding, false,
-   "no usable feature this frame: repeat the last command for a short while"},
+   "no usable feature this frame and no odometry: repeat the last command for a short while"},
   {Phase::kControl, kNavigatingOrHolding, "always", "", always,
    Action::kLose, S::kLost, false,
-   "no usable feature for longer than the hold: stop, forget the segment, relocalise"},
+   "no usable feature, beyond the hold or the dead-reckoning bounds: stop, forget the segment, "
+   "relocalise"},
 }};
 // clang-format on
 
 std::string state_list(StateSet set) {
   std::string out;
-  for (const S s : {S::kNotLocalized, S::kNavigating, S::kHolding, S::kLost, S::kTourComplete,
-                    S::kOverdue}) {
+  for (const S s : {S::kNotLocalized, S::kNavigating, S::kHolding, S::kDeadReckoning, S::kLost,
+                    S::kTourComplete, S::kOverdue}) {
     if (!contains(set, s)) continue;
     out += (out.empty() ? "" : ", ") + std::string(to_string(s));
   }
@@ -101,6 +109,7 @@ const char* to_string(Action a) {
     case Action::kContinue: return "continue";
     case Action::kDrive: return "drive";
     case Action::kHold: return "hold last command";
+    case Action::kDeadReckon: return "drive the taught path on odometry";
     case Action::kLose: return "stop (features_lost), forget segment";
   }
   return "?";

@@ -246,6 +246,12 @@ class GroundTruthMonitor final : public ReplayMonitor {
       if (c.stop && c.reason != nav::StopReason::kTourComplete && localized_once_) {
         ++run_.lost_frames;
       }
+      const nav::Telemetry& tel = step->telemetry;
+      run_.dead_reckoning_frames += tel.state == nav::NavState::kDeadReckoning;
+      if (tel.reacquired) {
+        run_.reacquisitions.push_back({tel.dead_reckoned_m, tel.dead_reckoned_rad,
+                                       tel.drift_corrected_m, tel.drift_corrected_rad});
+      }
     } else if (!run_.samples.empty()) {
       // Dropped frame: the base keeps the command in force.
       smp.v_m_s = run_.samples.back().v_m_s;

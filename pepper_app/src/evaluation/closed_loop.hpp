@@ -136,6 +136,15 @@ struct RunResult {
   int frames = 0;
   int frames_dropped = 0;
   int lost_frames = 0;         ///< frames with a stop command after the first localisation
+  /// Stretches driven on odometry alone (navigator dead reckoning, issue 29): frames, and per
+  /// re-acquisition the distance and turn driven blind and the drift the first vision fix
+  /// corrected (NaN: no fix on that frame).
+  int dead_reckoning_frames = 0;
+  struct Reacquisition {
+    double blind_m = 0.0, blind_rad = 0.0;
+    double corrected_m = 0.0, corrected_rad = 0.0;
+  };
+  std::vector<Reacquisition> reacquisitions;
   double sim_s = 0.0;
   double wall_s = 0.0;
   std::vector<RunSample> samples;

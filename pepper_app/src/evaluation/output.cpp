@@ -41,6 +41,13 @@ json summary_json(const Summary& s) {
 }
 
 json run_json(const RunResult& r) {
+  json reacquisitions = json::array();
+  for (const RunResult::Reacquisition& q : r.reacquisitions) {
+    reacquisitions.push_back({{"blind_m", num(q.blind_m)},
+                              {"blind_rad", num(q.blind_rad)},
+                              {"corrected_m", num(q.corrected_m)},
+                              {"corrected_rad", num(q.corrected_rad)}});
+  }
   return {{"index", r.index},
           {"start", {{"x_m", r.start_x_m}, {"y_m", r.start_y_m}, {"yaw_rad", r.start_yaw_rad},
                      {"lateral_m", num(r.start_lateral_m)}}},
@@ -60,6 +67,8 @@ json run_json(const RunResult& r) {
           {"frames", r.frames},
           {"frames_dropped", r.frames_dropped},
           {"lost_frames", r.lost_frames},
+          {"dead_reckoning_frames", r.dead_reckoning_frames},
+          {"reacquisitions", std::move(reacquisitions)},
           {"sim_s", r.sim_s},
           {"wall_s", r.wall_s}};
 }

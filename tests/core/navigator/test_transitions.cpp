@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -16,8 +17,10 @@ namespace pepper::core::navigator {
 namespace {
 
 constexpr NavState kStates[] = {NavState::kNotLocalized, NavState::kNavigating,
-                                NavState::kHolding,      NavState::kLost,
-                                NavState::kTourComplete, NavState::kOverdue};
+                                NavState::kHolding,      NavState::kDeadReckoning,
+                                NavState::kLost,         NavState::kTourComplete,
+                                NavState::kOverdue};
+constexpr unsigned kFactCombinations = 128;  // 2^(fields of StepFacts)
 constexpr Phase kPhases[] = {Phase::kEntry, Phase::kLocalise, Phase::kSegment, Phase::kControl};
 
 StepFacts facts_from_bits(unsigned bits) {
@@ -28,6 +31,7 @@ StepFacts facts_from_bits(unsigned bits) {
   f.overdue = bits & 8;
   f.has_demand = bits & 16;
   f.within_hold = bits & 32;
+  f.can_dead_reckon = bits & 64;
   return f;
 }
 
@@ -36,13 +40,13 @@ TEST(NavigatorTransitions, EveryPhaseIsCompleteForItsStates) {
   for (const Phase p : kPhases) {
     for (const NavState s : kStates) {
       if (decide(p, s, StepFacts{}) == nullptr) {
-        for (unsigned bits = 0; bits < 64; ++bits) {
+        for (unsigned bits = 0; bits < kFactCombinations; ++bits) {
           EXPECT_EQ(decide(p, s, facts_from_bits(bits)), nullptr)
               << to_string(p) << " " << to_string(s) << ": a row applies only to some facts";
         }
         continue;
       }
-      for (unsigned bits = 0; bits < 64; ++bits) {
+      for (unsigned bits = 0; bits < kFactCombinations; ++bits) {
         EXPECT_NE(decide(p, s, facts_from_bits(bits)), nullptr) << to_string(p) << " "
                                                                 << to_string(s) << " " << bits;
       }
@@ -60,7 +64,7 @@ TEST(NavigatorTransitions, EveryRowDecidesSomewhere) {
   std::set<const Transition*> used;
   for (const Phase p : kPhases) {
     for (const NavState s : kStates) {
-      for (unsigned bits = 0; bits < 64; ++bits) {
+      for (unsigned bits = 0; bits < kFactCombinations; ++bits) {
         if (const Transition* t = decide(p, s, facts_from_bits(bits))) used.insert(t);
       }
     }
@@ -85,6 +89,22 @@ TEST(NavigatorTransitions, DocsShowTheTablesOfTheCode) {
     if (b == std::string::npos || e == std::string::npos || e < b) return std::string("(missing)");
     return doc.substr(b + begin.size(), e - b - begin.size());
   };
+  // PEPPER_REGENERATE_DOCS=1 rewrites the blocks from the code (then review the diff).
+  if (const char* regen = std::getenv("PEPPER_REGENERATE_DOCS"); regen && *regen == '1') {
+    std::string updated = doc;
+    auto replace = [&](const std::string& name, const std::string& body) {
+      const std::string begin =
+          "<!-- " + name + ": generated from the code, see test_transitions.cpp -->\n";
+      const auto b = updated.find(begin);
+      const auto e = updated.find("<!-- end of " + name + " -->");
+      ASSERT_TRUE(b != std::string::npos && e != std::string::npos && e > b) << name;
+      updated.replace(b + begin.size(), e - b - begin.size(), body);
+    };
+    replace("transition table", transition_table_markdown());
+    replace("switch rules", switch_rules_markdown());
+    std::ofstream(std::string(PEPPER_SOURCE_DIR) + "/docs/method/navigator.md") << updated;
+    return;
+  }
   EXPECT_EQ(block("transition table"), transition_table_markdown());
   EXPECT_EQ(block("switch rules"), switch_rules_markdown());
 }

@@ -17,6 +17,7 @@
 // the vote; the verification's RANSAC is seeded). Not thread-safe (uses the caller's
 // FrameMatcher cache). Invalid options throw std::invalid_argument.
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -48,9 +49,12 @@ struct InitialLocalizationReport {
 
 /// Localises the matcher's current image in `map`. Key-image ids used with the matcher are the
 /// key image indices.
+/// `expected`: key images to verify whatever the vote says (the navigator: where odometry
+/// along the taught path puts the robot after a loss; indices outside the map are ignored).
 InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
                                           const memory::VisualMemory& map,
-                                          const InitialLocalizerOptions& options = {});
+                                          const InitialLocalizerOptions& options = {},
+                                          std::span<const int> expected = {});
 
 /// Stage 1 alone (exposed for tests and benchmarks).
 std::vector<int> prefilter_votes(const features::ImageFeatures& current,

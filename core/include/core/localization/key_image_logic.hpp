@@ -75,6 +75,10 @@ struct SwitchCounts {
   /// unknown (the navigator: NavigatorOptions::blind_passed_driven_factor): a switch is wanted,
   /// as for "passed IN" (criterion bit 16).
   bool passed_by_distance = false;
+  /// The caller's verdict that the robot's odometry, carried along the taught path, is past IN
+  /// while the scale ratio is unknown (the navigator: navigator/path_tracker.hpp): a switch is
+  /// wanted (criterion bit 32).
+  bool passed_by_odometry = false;
 };
 
 /// Bit set of the criteria that held: 1 three-view rule, 2 two-view rule (paper), 4 "passed IN"
@@ -82,6 +86,7 @@ struct SwitchCounts {
 enum class SwitchCriterion : uint8_t { kNone = 0, kThreeView = 1, kTwoView = 2, kBoth = 3 };
 inline constexpr int kCriterionPassedNext = 4;
 inline constexpr int kCriterionPassedByDistance = 16;
+inline constexpr int kCriterionPassedByOdometry = 32;
 inline constexpr int kCriterionGuardBlocked = 8;
 
 /// Which criteria hold for one frame (pure; the paper's two rules, no guard).

@@ -10,7 +10,13 @@
 //   kNavigating    segment (IP, IN, INN) known: counts for switching, control law, command.
 //   kHolding       the control law has no usable feature (too few verified matches with IN):
 //                  the last command is held for at most `hold_s` (measured with frame stamps).
-//   kLost          the hold expired: command stop (reason kFeaturesLost) and relocalise over the
+//   kDeadReckoning no usable feature either, but the frame carries odometry (Frame::odom), the
+//                  map its key images' taught poses (KeyImage::odom) and the robot's place on
+//                  the taught path is known: the taught path is driven on odometry
+//                  (path_tracker.hpp) while matching goes on every frame; vision takes over
+//                  again as soon as the control law has features, and the switcher advances
+//                  when odometry passes IN. Bounded by dead_reckoning_max_m / _rad.
+//   kLost          the hold (or the dead reckoning) expired: command stop (reason kFeaturesLost) and relocalise over the
 //                  whole map on each frame; back to kNavigating when that succeeds.
 //   kTourComplete  IN was the final image and arrival was seen (key_image_logic.hpp): stop
 //                  (reason kTourComplete) on every further frame.
@@ -47,6 +53,7 @@
 #include "core/localization/initial_localizer.hpp"
 #include "core/localization/key_image_logic.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "core/navigator/path_tracker.hpp"
 #include "core/navigator/telemetry.hpp"
 #include "core/navigator/transitions.hpp"
 
@@ -183,6 +190,13 @@ struct NavigatorOptions {
   double turn_feedforward_max_lead_rad = 0.1;
   double segment_overdue_factor = 6.0;
   double segment_overdue_min_s = 20.0;
+  /// Dead reckoning (issue 29): how far the robot may drive on odometry alone, since vision was
+  /// last usable, before it stops and says it is lost (m, > 0; rad of heading change, > 0).
+  /// Why these: odometry drifts about 2 % of the distance and a few degrees per turn, so 2 m
+  /// stay within about 5 cm of the taught path; a corridor end with a blank wall takes a turn of
+  /// up to 180 degrees (a U-turn) before the next corridor is in view.
+  double dead_reckoning_max_m = 2.0;
+  double dead_reckoning_max_rad = 3.3;
   std::vector<std::string> validate() const;
 };
 
@@ -259,6 +273,14 @@ class Navigator {
   /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
   bool vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev, double focal_px) const;
   void remember_tracks(const features::FrameMatcher& fm);
+  /// The frame's odometry moves the estimate on the taught path (and, while dead reckoning,
+  /// adds to the distance and turn driven blind).
+  void follow_odometry(const Frame& frame);
+  /// The dead-reckoning command: the VNHV path-following law on the odometry's deviation from
+  /// the taught path (a turn on the spot: turn to the taught heading).
+  Command dead_reckon(int64_t t_ns, Telemetry& tel);
+  /// Whether dead reckoning can drive this frame (StepFacts::can_dead_reckon).
+  bool can_dead_reckon() const;
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
 
   memory::VisualMemory map_;
@@ -300,6 +322,13 @@ class Navigator {
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
   // segment is forgotten, so it depends on the frames only.
   std::unordered_map<int, std::vector<features::PointMatch>> klt_priors_;
+  // Odometry (issue 29): the estimate on the taught path, the frame's reading, the distance and
+  // turn driven on odometry alone since vision was last usable, and this frame's vision fix's
+  // correction of the estimate (distance m, |heading| rad).
+  TaughtPathTracker tracker_;
+  std::optional<OdometryPose> odom_;
+  double blind_m_ = 0.0, blind_rad_ = 0.0;
+  std::optional<std::pair<double, double>> fix_correction_;
 };
 
 }  // namespace pepper::core::navigator

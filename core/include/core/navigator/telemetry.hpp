@@ -14,7 +14,15 @@ namespace pepper::core::navigator {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-enum class NavState { kNotLocalized, kNavigating, kHolding, kLost, kTourComplete, kOverdue };
+enum class NavState {
+  kNotLocalized,
+  kNavigating,
+  kHolding,
+  kLost,
+  kTourComplete,
+  kOverdue,
+  kDeadReckoning,  ///< vision sees too little: the taught path is driven on odometry
+};
 enum class StopReason {
   kNone,          ///< moving (not a stop)
   kNotLocalized,  ///< initial localisation has not succeeded yet
@@ -74,6 +82,16 @@ struct Telemetry {
   double omega_feedforward_rad_s = kNaN;
   bool turning = false;
   int64_t hold_elapsed_ns = 0;  ///< time since the last usable control, when holding
+  // Odometry (navigator/path_tracker.hpp). NaN where unknown.
+  /// Progress along the taught path from odometry, in key-image indices (i + fraction).
+  double odom_progress = kNaN;
+  /// While dead reckoning, and on the frame vision takes over again: distance (m) and turn
+  /// (rad) driven on odometry alone since vision was last usable.
+  double dead_reckoned_m = kNaN, dead_reckoned_rad = kNaN;
+  bool reacquired = false;  ///< vision drives again on this frame after dead reckoning
+  /// On that frame, how far the first vision fix moved the odometry estimate: the drift
+  /// corrected at re-acquisition, m and rad (NaN: no fix on that frame).
+  double drift_corrected_m = kNaN, drift_corrected_rad = kNaN;
   // Localisation.
   bool localization_ran = false;
   int localization_best = -1, localization_best_count = 0, localization_verified = 0;

@@ -29,6 +29,9 @@ struct StepFacts {
   bool overdue = false;        ///< the segment lasted longer than segment_overdue_* allow
   bool has_demand = false;     ///< a control law produced a yaw-rate demand
   bool within_hold = false;    ///< an earlier command exists, younger than hold_s
+  /// The frame has odometry, the map its key images' taught poses, the robot's place on the
+  /// taught path is known, and the dead reckoning so far is within dead_reckoning_max_*.
+  bool can_dead_reckon = false;
 };
 
 enum class Phase { kEntry, kLocalise, kSegment, kControl };
@@ -42,6 +45,7 @@ enum class Action {
   kContinue,          ///< nothing to decide here: the next stage runs
   kDrive,             ///< the demand through the velocity schedule
   kHold,              ///< repeat the last command
+  kDeadReckon,        ///< follow the taught path on odometry
   kLose,              ///< stop, forget the segment, relocalise on the next frame
 };
 

@@ -1,0 +1,124 @@
+#include "core/navigator/path_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pepper::core::navigator {
+namespace {
+
+double wrap(double a) {
+  a = std::remainder(a, 2.0 * M_PI);
+  return a <= -M_PI ? a + 2.0 * M_PI : a;
+}
+
+// Heading changes below this on a piece shorter than kInPlaceLengthM: two key images at one pose
+// (nothing to drive).
+constexpr double kNoTurnRad = 0.02;
+
+}  // namespace
+
+OdometryPose compose(const OdometryPose& a, const OdometryPose& b) {
+  const double c = std::cos(a.yaw_rad), s = std::sin(a.yaw_rad);
+  return {a.x_m + c * b.x_m - s * b.y_m, a.y_m + s * b.x_m + c * b.y_m,
+          wrap(a.yaw_rad + b.yaw_rad)};
+}
+
+OdometryPose between(const OdometryPose& a, const OdometryPose& b) {
+  const double c = std::cos(a.yaw_rad), s = std::sin(a.yaw_rad);
+  const double dx = b.x_m - a.x_m, dy = b.y_m - a.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy, wrap(b.yaw_rad - a.yaw_rad)};
+}
+
+TaughtPathTracker::TaughtPathTracker(const std::vector<std::optional<OdometryPose>>& taught) {
+  usable_ = taught.size() >= 2;
+  for (const auto& p : taught) {
+    if (!p || !std::isfinite(p->x_m) || !std::isfinite(p->y_m) || !std::isfinite(p->yaw_rad)) {
+      usable_ = false;
+      break;
+    }
+    taught_.push_back(*p);
+  }
+  if (!usable_) taught_.clear();
+}
+
+void TaughtPathTracker::reset() {
+  X_.reset();
+  last_odom_.reset();
+  piece_ = 0;
+}
+
+void TaughtPathTracker::set(const OdometryPose& X_teach_base, const OdometryPose& odom,
+                            int from_piece) {
+  X_ = X_teach_base;
+  last_odom_ = odom;
+  piece_ = std::clamp(from_piece, 0, std::max(0, key_count() - 2));
+}
+
+void TaughtPathTracker::predict(const OdometryPose& odom) {
+  if (X_ && last_odom_) X_ = compose(*X_, between(*last_odom_, odom));
+  last_odom_ = odom;
+}
+
+std::pair<double, double> TaughtPathTracker::correct(const OdometryPose& X_fix, double gain) {
+  if (!X_) {
+    X_ = X_fix;
+    return {0.0, 0.0};
+  }
+  const double dx = X_fix.x_m - X_->x_m, dy = X_fix.y_m - X_->y_m;
+  const double dyaw = wrap(X_fix.yaw_rad - X_->yaw_rad);
+  const std::pair<double, double> error{std::hypot(dx, dy), std::abs(dyaw)};
+  X_ = OdometryPose{X_->x_m + gain * dx, X_->y_m + gain * dy, wrap(X_->yaw_rad + gain * dyaw)};
+  return error;
+}
+
+bool TaughtPathTracker::piece_in_place(int i) const {
+  const OdometryPose& a = taught_[static_cast<size_t>(i)];
+  const OdometryPose& b = taught_[static_cast<size_t>(i) + 1];
+  return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) < kInPlaceLengthM;
+}
+
+double TaughtPathTracker::fraction_on(int i) const {
+  const OdometryPose& a = taught_[static_cast<size_t>(i)];
+  const OdometryPose& b = taught_[static_cast<size_t>(i) + 1];
+  if (piece_in_place(i)) {
+    const double turn = wrap(b.yaw_rad - a.yaw_rad);
+    if (std::abs(turn) < kNoTurnRad) return 1.0;
+    return wrap(X_->yaw_rad - a.yaw_rad) / turn;
+  }
+  const double ux = b.x_m - a.x_m, uy = b.y_m - a.y_m;
+  return ((X_->x_m - a.x_m) * ux + (X_->y_m - a.y_m) * uy) / (ux * ux + uy * uy);
+}
+
+void TaughtPathTracker::advance_to(int piece) {
+  piece_ = std::max(piece_, std::min(piece, std::max(0, key_count() - 2)));
+}
+
+std::optional<PathDeviation> TaughtPathTracker::deviation() {
+  if (!usable_ || !X_) return std::nullopt;
+  const int last_piece = key_count() - 2;
+  double f = fraction_on(piece_);
+  while (f >= 1.0 && piece_ < last_piece) {
+    ++piece_;
+    f = fraction_on(piece_);
+  }
+  const OdometryPose& a = taught_[static_cast<size_t>(piece_)];
+  const OdometryPose& b = taught_[static_cast<size_t>(piece_) + 1];
+  const double turn = wrap(b.yaw_rad - a.yaw_rad);
+  PathDeviation d;
+  d.piece = piece_;
+  d.progress = piece_ + std::clamp(f, 0.0, 1.0);
+  d.in_place = piece_in_place(piece_);
+  if (d.in_place) {
+    d.remaining_turn_rad = wrap(b.yaw_rad - X_->yaw_rad);
+    d.heading_rad = wrap(X_->yaw_rad - (a.yaw_rad + std::clamp(f, 0.0, 1.0) * turn));
+    return d;
+  }
+  const double length_m = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+  const double ux = (b.x_m - a.x_m) / length_m, uy = (b.y_m - a.y_m) / length_m;
+  d.lateral_m = ux * (X_->y_m - a.y_m) - uy * (X_->x_m - a.x_m);
+  d.heading_rad = wrap(X_->yaw_rad - (a.yaw_rad + std::clamp(f, 0.0, 1.0) * turn));
+  d.curvature_1_m = turn / length_m;
+  return d;
+}
+
+}  // namespace pepper::core::navigator

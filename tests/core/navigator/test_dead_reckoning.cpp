@@ -1,0 +1,147 @@
+// Dead reckoning through a blind turn (issue 29): the shared test tour's 60-degree turn is
+// replayed in closed loop on a unicycle with drifting wheel odometry while the camera sees a
+// uniform grey wall (no feature at all) for the whole turn. The navigator must keep driving the
+// taught turn on odometry, never stop, hand back to vision after it, and complete the tour; with
+// the view gone for good it must stop once the dead-reckoning bound is used up, and say so.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <vector>
+
+#include "core/navigator/navigator.hpp"
+#include "core/navigator/test_world.hpp"
+
+namespace pepper::core::navigator {
+namespace {
+
+const test::SharedTour& tour() { return test::shared_tour(); }
+
+// The map with each key image's taught odometry: the teach path's pose at its frame (the teach
+// run's odometry is exact here; the replay's drifts).
+memory::VisualMemory map_with_odometry() {
+  memory::VisualMemory map = tour().map;
+  for (memory::KeyImage& k : map.key_images) {
+    const test::Pose2d& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
+    k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+  }
+  return map;
+}
+
+struct ClosedLoopRun {
+  std::vector<StepResult> steps;
+  std::vector<test::Pose2d> truth;  ///< the robot's pose when each frame was taken
+};
+
+// Closed loop at 5 Hz from the tour's start. The robot executes each command exactly; its
+// odometry (another origin and heading) reads 2 % too much distance and 4 % too much turn.
+// Frames are blank while `blind(travelled_m)` holds.
+template <class Blind>
+ClosedLoopRun closed_loop(const NavigatorOptions& o, Blind blind, int max_frames = 260) {
+  Navigator nav(map_with_odometry(), o);
+  ClosedLoopRun run;
+  test::Pose2d pose = tour().path.front();
+  OdometryPose odom{10.0, -4.0, 1.0};
+  double travelled_m = 0.0;
+  constexpr int64_t kDtNs = 200'000'000;
+  const CameraIntrinsics& k = tour().camera;
+  for (int i = 0; i < max_frames; ++i) {
+    Frame f;
+    f.gray = test::shared_world().render(pose, k, 0.05, 1.15, blind(travelled_m));
+    f.t_ns = i * kDtNs;
+    f.index = i;
+    f.odom = odom;
+    run.truth.push_back(pose);
+    run.steps.push_back(nav.step(f));
+    const Command& c = run.steps.back().command;
+    if (c.stop && c.reason == StopReason::kTourComplete) break;
+    if (c.stop && i > 5) break;  // any other stop after the start ends the run (checked)
+    const double v = c.stop ? 0.0 : c.v_m_s, w = c.stop ? 0.0 : c.omega_rad_s;
+    const double dt = kDtNs * 1e-9;
+    // Exact unicycle step (midpoint heading).
+    const double mid = pose.yaw_rad + 0.5 * w * dt;
+    pose.x_m += v * dt * std::cos(mid);
+    pose.y_m += v * dt * std::sin(mid);
+    pose.yaw_rad += w * dt;
+    travelled_m += std::abs(v) * dt;
+    const double omid = odom.yaw_rad + 0.5 * 1.04 * w * dt;
+    odom.x_m += 1.02 * v * dt * std::cos(omid);
+    odom.y_m += 1.02 * v * dt * std::sin(omid);
+    odom.yaw_rad += 1.04 * w * dt;
+  }
+  return run;
+}
+
+// Distance from the taught path (its densely sampled poses).
+double off_path_m(const test::Pose2d& p) {
+  double best = 1e9;
+  for (const test::Pose2d& q : tour().path) {
+    best = std::min(best, std::hypot(p.x_m - q.x_m, p.y_m - q.y_m));
+  }
+  return best;
+}
+
+TEST(DeadReckoning, DrivesABlindTurnAndHandsBackToVision) {
+  // The taught turn spans 2.5 .. 3.34 m of the path; blind from 2.3 to 3.5 m travelled.
+  const auto blind = [](double travelled_m) { return travelled_m > 2.3 && travelled_m < 3.5; };
+  const ClosedLoopRun run = closed_loop(NavigatorOptions{}, blind);
+  ASSERT_FALSE(run.steps.empty());
+  int dead_reckoned = 0, reacquired = 0, stops_after_start = 0;
+  double worst_off_m = 0.0;
+  bool started = false;
+  for (size_t i = 0; i < run.steps.size(); ++i) {
+    const StepResult& r = run.steps[i];
+    dead_reckoned += r.telemetry.state == NavState::kDeadReckoning;
+    reacquired += r.telemetry.reacquired;
+    if (!r.command.stop) started = true;
+    if (started && r.command.stop && r.command.reason != StopReason::kTourComplete) {
+      ++stops_after_start;
+    }
+    worst_off_m = std::max(worst_off_m, off_path_m(run.truth[i]));
+  }
+  EXPECT_GT(dead_reckoned, 10);  // ~1.2 m at 0.08 .. 0.15 m/s, 5 Hz
+  EXPECT_GE(reacquired, 1);
+  EXPECT_EQ(stops_after_start, 0) << "the base stopped before the end of the tour";
+  EXPECT_EQ(run.steps.back().command.reason, StopReason::kTourComplete);
+  EXPECT_LT(worst_off_m, 0.15);
+}
+
+TEST(DeadReckoning, StopsAndSaysSoWhenVisionNeverComesBack) {
+  NavigatorOptions o;
+  o.dead_reckoning_max_m = 0.6;
+  const auto blind = [](double travelled_m) { return travelled_m > 1.0; };
+  const ClosedLoopRun run = closed_loop(o, blind);
+  const StepResult& last = run.steps.back();
+  EXPECT_TRUE(last.command.stop);
+  EXPECT_EQ(last.command.reason, StopReason::kFeaturesLost);
+  EXPECT_EQ(last.telemetry.state, NavState::kLost);
+  EXPECT_GE(last.telemetry.dead_reckoned_m, 0.6);
+  EXPECT_LT(last.telemetry.dead_reckoned_m, 0.7);
+  const auto blind_frames =
+      std::count_if(run.steps.begin(), run.steps.end(), [](const StepResult& r) {
+        return r.telemetry.state == NavState::kDeadReckoning;
+      });
+  EXPECT_GT(blind_frames, 3);
+}
+
+TEST(DeadReckoning, WithoutOdometryTheHoldRulesStay) {
+  // Frames without odometry: no dead reckoning, the hold then the loss (NavState::kHolding).
+  Navigator nav(map_with_odometry(), NavigatorOptions{});
+  const std::vector<Frame>& frames = tour().frames;
+  for (int i = 0; i < 10; ++i) nav.step(frames[static_cast<size_t>(i)]);
+  Frame blank;
+  blank.gray = cv::Mat(tour().camera.height_px, tour().camera.width_px, CV_8UC1, cv::Scalar(128));
+  bool held = false;
+  for (int i = 1; i <= 12; ++i) {
+    blank.t_ns = frames[9].t_ns + i * 200'000'000LL;
+    const StepResult r = nav.step(blank);
+    EXPECT_NE(r.telemetry.state, NavState::kDeadReckoning);
+    held |= r.telemetry.state == NavState::kHolding;
+  }
+  EXPECT_TRUE(held);
+  EXPECT_EQ(nav.state(), NavState::kLost);
+}
+
+}  // namespace
+}  // namespace pepper::core::navigator
