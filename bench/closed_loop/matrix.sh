@@ -4,7 +4,8 @@
 # 10 starts each, seed 1; plus 20 generated worlds (`pepper_app world generate`, seeds 1 to 20,
 # kinds room / corridor / building in turn: seed % 3 = 1, 2, 0) x {none, light x0.7}, 5 starts
 # each. The generated worlds are written by this script into DIR/worlds/ before the runs (the
-# generator is deterministic, so a resumed matrix evaluates the same files). One `pepper_app
+# generator is deterministic; a file already there is kept, so a resumed matrix evaluates the
+# same files even if the generator changed meanwhile). One `pepper_app
 # evaluate` process per configuration, two side by side (both cores); each configuration keeps its own JSON, so a matrix can be run in shards across
 # sessions and combined (bench/closed_loop/combine.py). A configuration whose JSON exists is
 # skipped, so the same command resumes an interrupted matrix.

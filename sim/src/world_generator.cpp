@@ -208,8 +208,10 @@ struct Room {
 struct View {
   Vec2 from;
   double heading_rad;
-  int turn;  // index into turns, -1 for the end of the tour
+  int turn;  // index into turns, or kEndView, kStartView
 };
+constexpr int kEndView = -1;
+constexpr int kStartView = -2;
 
 // The tour: straight legs and turns; segment i joins pts[i] and pts[i + 1].
 struct Turtle {
@@ -267,6 +269,7 @@ struct Draft {
   double ceiling_m = 2.6;
   double corridor_width_m = 0.0;
   bool poor_view = false;
+  bool end_blank = false;
   std::vector<std::pair<Vec2, double>> doorways;  // centre, heading of the tour through it
 };
 
@@ -500,7 +503,7 @@ void build_room_kind(Draft& d, Rng& rng) {
     d.path = t.pts;
     d.turns = t.turns;
     d.views = t.views;
-    d.views.push_back({t.pts.back(), t.heading_rad, -1});
+    d.views.push_back({t.pts.back(), t.heading_rad, kEndView});
     return;
   }
   throw Reject{"no walk fits the room"};
@@ -559,7 +562,7 @@ void build_corridor_kind(Draft& d, Rng& rng) {
   d.path.back() -= 1.0 * d1;
   d.turns = t.turns;
   d.views = t.views;
-  d.views.push_back({d.path.back(), t.heading_rad, -1});
+  d.views.push_back({d.path.back(), t.heading_rad, kEndView});
 }
 
 // Building kind: room A, a doorway, a corridor of 2 or 3 legs, a doorway, room B. Each room is
@@ -651,7 +654,7 @@ void build_building_kind(Draft& d, Rng& rng) {
   d.path = t.pts;
   d.turns = t.turns;
   d.views = t.views;
-  d.views.push_back({t.pts.back(), t.heading_rad, -1});
+  d.views.push_back({t.pts.back(), t.heading_rad, kEndView});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -707,8 +710,21 @@ void shape_views(Draft& d, Rng& rng, double blank_prob) {
     // the turn; capped so that a far wall in a room is not emptied as a whole.
     const double half = std::min(2.0, 0.55 * best + 0.5);
     const Interval zone{s_hit - half, s_hit + half};
-    const bool blank = d.poor_view || rng.chance(blank_prob);
+    if (v.turn == kStartView) {
+      // The first view of the tour is never blank (a replay must be able to start): a poster
+      // goes up at once, before any blank zone can exclude it. (A corridor's start looks along
+      // the corridor, whose side walls are in view: its far wall stays free to be blank.)
+      if (!w.straight() || d.rooms.empty()) continue;
+      const double c = std::clamp(s_hit, 0.8, std::max(0.8, w.length() - 0.8));
+      for (double off : {0.0, -0.5, 0.5, -1.0, 1.0})
+        if (add_poster(w, rng, c + off, 0.3)) break;
+      continue;
+    }
+    bool blank = d.poor_view || rng.chance(blank_prob);
+    for (const Feature& f : w.features)  // what is already there stays in view
+      blank = blank && !(f.at_m - f.width_m / 2 < zone.s1 && zone.s0 < f.at_m + f.width_m / 2);
     if (v.turn >= 0) d.turns[static_cast<size_t>(v.turn)].faces_blank |= blank;
+    if (v.turn == kEndView && blank) d.end_blank = true;
     if (blank) {
       w.blank.push_back(zone);
       // Corridor ends, bends and short walls across a corner: the whole piece in flat paint.
@@ -884,7 +900,8 @@ void add_furniture(Draft& d, Rng& rng, const std::vector<Vec2>& tour, double cle
       bool in_view = false;
       for (const View& v : d.views) {
         if (v.turn >= 0 && !d.turns[static_cast<size_t>(v.turn)].faces_blank) continue;
-        if (v.turn < 0 && !d.poor_view) continue;
+        if (v.turn == kEndView && !d.end_blank) continue;
+        if (v.turn == kStartView) continue;
         if (dist_point_segment(b.c, v.from, v.from + 6.0 * dir(v.heading_rad)) < reach + 0.8)
           in_view = true;
       }
@@ -1216,6 +1233,10 @@ GeneratedWorld generate_world(const WorldGeneratorOptions& options) {
           break;
       }
       check_walls_do_not_cross(d);
+      d.views.insert(d.views.begin(),
+                     View{d.path[0], std::atan2(d.path[1].y() - d.path[0].y(),
+                                                d.path[1].x() - d.path[0].x()),
+                          kStartView});
       shape_views(d, rng, options.blank_view_prob);
       add_wall_features(d, rng);
       const auto tour = samples(d.path, 0.05);

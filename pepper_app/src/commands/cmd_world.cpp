@@ -31,7 +31,7 @@ struct WorldArgs {
   std::string out;
   // generate
   std::string kind = "building";
-  std::string textures = "worlds/textures";
+  std::string textures = std::string(PEPPER_WORLDS_DIR) + "/textures";
   double poor_view_fraction = sim::WorldGeneratorOptions{}.poor_view_fraction;
   double blank_view_prob = sim::WorldGeneratorOptions{}.blank_view_prob;
 };
@@ -112,17 +112,21 @@ int run_generate(const WorldArgs& a) {
     return 2;
   }
   // Relative to the world file's folder, as the shipped worlds write them, when both are in one
-  // tree (a checkout); absolute otherwise (e.g. a world in /tmp).
-  const fs::path common = *out.parent_path().lexically_normal().begin() / "";
-  const auto first_two = [](const fs::path& p) {
-    auto it = p.lexically_normal().begin();
-    fs::path r = *it++;
-    return it == p.lexically_normal().end() ? r : r / *it;
+  // tree (their first two components agree, e.g. a checkout under /work); absolute otherwise
+  // (e.g. a world in /tmp).
+  const auto head = [](const fs::path& p) {
+    const fs::path n = p.lexically_normal();
+    fs::path r;
+    int k = 0;
+    for (const fs::path& part : n) {
+      if (k++ == 2) break;
+      r /= part;
+    }
+    return r;
   };
-  o.texture_dir = first_two(out.parent_path()) == first_two(textures)
+  o.texture_dir = head(out.parent_path()) == head(textures)
                       ? textures.lexically_relative(out.parent_path()).generic_string()
                       : textures.lexically_normal().generic_string();
-  (void)common;
   if (o.texture_dir.empty()) o.texture_dir = textures.generic_string();
   const auto errors = o.validate();
   if (!errors.empty()) {
@@ -205,7 +209,8 @@ void register_world_command(CLI::App& app) {
   gen->add_option("--kind", args->kind, "room, corridor or building")->capture_default_str();
   gen->add_option("--out", args->out, "Output world file (.yaml)")->required();
   gen->add_option("--textures", args->textures,
-                  "Folder of the shipped photographs (written relative to the output's folder)")
+                  "Folder of the shipped photographs (default: this build's checkout; written "
+                  "relative to the output's folder when both are in one tree)")
       ->capture_default_str();
   gen->add_option("--poor-view-fraction", args->poor_view_fraction,
                   "Fraction of seeds whose every turn and end face blank walls (issue 29)")
@@ -214,8 +219,8 @@ void register_world_command(CLI::App& app) {
                   "In the other worlds, chance that one turn's view is blank")
       ->capture_default_str();
   gen->footer(
-      "Example:\n  pepper_app world generate --seed 7 --kind corridor --out /tmp/gen/c7.yaml "
-      "--textures worlds/textures\n  pepper_app evaluate --world /tmp/gen/c7.yaml --starts 2 "
+      "Example:\n  pepper_app world generate --seed 7 --kind corridor --out /tmp/gen/c7.yaml\n"
+      "  pepper_app evaluate --world /tmp/gen/c7.yaml --starts 2 "
       "--size 320x240\nFormat, pool and knobs: docs/mock_robot.md (Generated worlds).");
   gen->callback([args] {
     try {
