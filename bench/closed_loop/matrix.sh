@@ -5,10 +5,10 @@
 # kinds room / corridor / building in turn: seed % 3 = 1, 2, 0) x {none, light x0.7}, 5 starts
 # each. The generated worlds are written by this script into DIR/worlds/ before the runs (the
 # generator is deterministic; a file already there is kept, so a resumed matrix evaluates the
-# same files even if the generator changed meanwhile). One `pepper_app
-# evaluate` process per configuration, two side by side (both cores); each configuration keeps its own JSON, so a matrix can be run in shards across
-# sessions and combined (bench/closed_loop/combine.py). A configuration whose JSON exists is
-# skipped, so the same command resumes an interrupted matrix.
+# same files even if the generator changed meanwhile). One `pepper_app evaluate` process per
+# configuration, two side by side (both cores); each configuration keeps its own JSON, so a
+# matrix can be run in shards across sessions and combined (bench/closed_loop/combine.py). A
+# configuration whose JSON exists is skipped, so the same command resumes an interrupted matrix.
 #
 # Usage: bench/closed_loop/matrix.sh [--out DIR] [--app BIN] [--size WxH] [--starts N]
 #                                    [--gen-starts N] [--gen-seeds N]
@@ -48,7 +48,7 @@ while [[ $# -gt 0 ]]; do
     --shard) SHARD=$2; shift 2 ;;
     --only) ONLY=$2; shift 2 ;;
     --list) LIST=1; shift ;;
-    -h|--help) sed -n '2,29p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     *) echo "matrix.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
