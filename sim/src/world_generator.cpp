@@ -1075,7 +1075,7 @@ std::string to_yaml(const Draft& d, const GeneratedWorld& g, const std::string& 
     os << "  - points: [";
     for (size_t i = 0; i < w.pts.size(); ++i) os << (i ? ", " : "") << pt(w.pts[i]);
     os << "]\n    texture: " << w.texture << "\n    tile_m: [2.0, " << num(d.ceiling_m) << "]\n";
-    if (w.texture != "blank") os << "    skirting: {texture: skirting, height_m: 0.1}\n";
+    os << "    skirting: {texture: skirting, height_m: 0.1}\n";  // blank walls too: a real one has it
     const std::string side = w.space_left ? "left" : "right";
     for (FeatureKind kind :
          {FeatureKind::kOpening, FeatureKind::kDoor, FeatureKind::kWindow, FeatureKind::kPoster}) {
