@@ -148,6 +148,7 @@ struct Wall {
   std::string texture = "paint";
   bool space_left = true;  // which side the walkable space is on, seen along the polyline
   bool cap = false;        // a corridor end
+  bool in_room = false;    // one of a room's four walls (else a corridor's)
   std::vector<Feature> features;
   std::vector<Interval> busy;   // features and tall furniture
   std::vector<Interval> blank;  // views at turns kept blank
@@ -356,6 +357,7 @@ void add_room_walls(Draft& d, const Room& r, const std::string& texture) {
     w.pts = {p, q};
     w.texture = texture;
     w.space_left = true;
+    w.in_room = true;
     d.walls.push_back(w);
   }
   d.rooms.push_back(r);
@@ -750,7 +752,7 @@ void add_wall_features(Draft& d, Rng& rng) {
   for (Wall& w : d.walls) {
     if (!w.straight()) continue;
     const double len = w.length();
-    const bool room_wall = !w.cap && (w.texture == "paint" || w.texture == "paint_b");
+    const bool room_wall = w.in_room;
     // Windows on room walls, sometimes on a corridor's wall (daylight, a bright blank).
     if (len > 3.0 && rng.chance(room_wall ? 0.45 : 0.15)) {
       const int n = rng.integer(1, std::max(1, static_cast<int>(len / 3.5)));
@@ -844,8 +846,7 @@ void add_furniture(Draft& d, Rng& rng, const std::vector<Vec2>& tour, double cle
   int count = 0;
   for (Wall& w : d.walls) {
     if (!w.straight() || w.cap) continue;
-    const bool room_wall = w.texture == "paint" || w.texture == "paint_b" ||
-                           (w.texture == "blank" && d.corridor_width_m == 0.0);
+    const bool room_wall = w.in_room;
     const auto& pool = room_wall ? kRoomFurniture : kCorridorFurniture;
     const int tries = static_cast<int>(w.length() / (room_wall ? 1.5 : 3.0));
     for (int i = 0; i < tries; ++i) {

@@ -219,9 +219,9 @@ void register_world_command(CLI::App& app) {
                   "In the other worlds, chance that one turn's view is blank")
       ->capture_default_str();
   gen->footer(
-      "Example:\n  pepper_app world generate --seed 7 --kind corridor --out /tmp/gen/c7.yaml\n"
-      "  pepper_app evaluate --world /tmp/gen/c7.yaml --starts 2 "
-      "--size 320x240\nFormat, pool and knobs: docs/mock_robot.md (Generated worlds).");
+      "Example:\n  pepper_app world generate --seed 7 --kind corridor --out gen/c7.yaml\n"
+      "then, e.g.: pepper_app evaluate --world gen/c7.yaml --starts 2 --size 320x240\n"
+      "Format, pool and knobs: docs/mock_robot.md (Generated worlds).");
   gen->callback([args] {
     try {
       exit_code() = run_generate(*args);
