@@ -108,7 +108,7 @@ int run_generate(const WorldArgs& a) {
   if (!fs::exists(textures / "pepper_office_a.jpg")) {
     std::cerr << "pepper_app world generate: --textures: '" << a.textures
               << "' does not hold the shipped photographs (worlds/textures/pepper_office_a.jpg "
-                 "...); run from the checkout or pass --textures\n";
+                 "...)\n";
     return 2;
   }
   // Relative to the world file's folder, as the shipped worlds write them, when both are in one
