@@ -9,6 +9,10 @@ distance any run drove before it first came within 5 cm of the path, the range o
 median step times, and every failed run with how and where it ended. Definitions:
 docs/evaluation.md. Evaluations of the same configuration in several shards (e.g. `--run 1 2 3`
 and `--run 4 5 6`) are merged run by run.
+
+Generated worlds (`gen_<kind>_<seed>`, from `pepper_app world generate`) get a second table, one
+row per disturbance over all of them, as issue 26 states its targets: success over all runs,
+lateral RMS on the successes, and every failure with its world seed and how it ended.
 """
 import argparse
 import json
@@ -64,6 +68,30 @@ def main():
               f"{fmt(max(first) if first else None)} m | "
               f"{fmt(min(steps)) if steps else '-'}-{fmt(max(steps)) if steps else '-'} | "
               f"{'; '.join(fails) if fails else 'none'} |")
+    gen = {}
+    for k, e in merged.items():
+        if k[0].startswith("gen_"):
+            gen.setdefault(k[1:], []).append(e)
+    if gen:
+        print()
+        print("Generated worlds (all seeds together):")
+        print()
+        print("| features / controller / size | disturbance | worlds | success | "
+              "lateral RMS mean / max of RMS (cm) | failures (world: run, outcome, where) |")
+        print("| --- | --- | --- | --- | --- | --- |")
+        for g in sorted(gen):
+            evals = sorted(gen[g], key=lambda e: e["world"])
+            runs = [(e["world"], r) for e in evals for r in e["runs"]]
+            ok = [r for _, r in runs if r["success"]]
+            rms = [r["lateral_rms_m"] for r in ok if r["lateral_rms_m"] is not None]
+            fails = [f"{w}: run {r['index'] + 1} {r['outcome']} at {r['travelled_m']:.1f} m"
+                     + (f" ({r['detail']})" if r.get("detail") else "")
+                     for w, r in runs if not r["success"]]
+            print(f"| {g[0]} / {g[1]} / {g[2]} | {g[3]} | {len(evals)} | {len(ok)}/{len(runs)} "
+                  f"({fmt(100.0 * len(ok) / len(runs) if runs else None, 1, 0)} %) | "
+                  f"{fmt(sum(rms) / len(rms) if rms else None, 100)} / "
+                  f"{fmt(max(rms) if rms else None, 100)} | "
+                  f"{'; '.join(fails) if fails else 'none'} |")
     if a.out:
         with open(a.out, "w") as fh:
             json.dump({"format": "pepper.evaluation", "version": 1,

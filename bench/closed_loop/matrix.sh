@@ -1,28 +1,37 @@
 #!/usr/bin/env bash
 # The standard closed-loop evaluation matrix (issue 26), with the shipped defaults at VGA:
 # every shipped world x {none, light x0.6, light x1.4, furniture, person, drops, latency},
-# 10 starts each, seed 1. One `pepper_app evaluate` process per configuration, two side by side
-# (both cores); each configuration keeps its own JSON, so a matrix can be run in shards across
-# sessions and combined (bench/closed_loop/combine.py). A configuration whose JSON exists is
-# skipped, so the same command resumes an interrupted matrix.
+# 10 starts each, seed 1; plus 20 generated worlds (`pepper_app world generate`, seeds 1 to 20,
+# kinds room / corridor / building in turn: seed % 3 = 1, 2, 0) x {none, light x0.7}, 5 starts
+# each. The generated worlds are written by this script into DIR/worlds/ before the runs (the
+# generator is deterministic; a file already there is kept, so a resumed matrix evaluates the
+# same files even if the generator changed meanwhile). One `pepper_app evaluate` process per
+# configuration, two side by side (both cores); each configuration keeps its own JSON, so a
+# matrix can be run in shards across sessions and combined (bench/closed_loop/combine.py). A
+# configuration whose JSON exists is skipped, so the same command resumes an interrupted matrix.
 #
 # Usage: bench/closed_loop/matrix.sh [--out DIR] [--app BIN] [--size WxH] [--starts N]
+#                                    [--gen-starts N] [--gen-seeds N]
 #                                    [--jobs N] [--shard I/N] [--only REGEX] [--list]
+#   --gen-starts N  starts per generated world (5); --gen-seeds N: seeds 1..N (20; 0: none)
 #   --shard I/N   run only configurations I, I+N, I+2N, ... (1-based) of the list
-#   --only REGEX  run only configurations whose name matches (e.g. 'robotics_room' or 'light')
+#   --only REGEX  run only configurations whose name matches (e.g. 'robotics_room', 'light',
+#                 '^gen_' for the generated worlds only)
 #   --list        print the configuration names and exit
 # Example (two sessions, each half of the matrix, then one table):
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 1/2
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 2/2
 #   bench/closed_loop/combine.py /work/eval/matrix/*.json
 # Cost: about 1 to 3 minutes per run at VGA with two processes on a quiet 2-core machine
-# (7 x 4 x 10 = 280 runs: several sessions).
+# (7 x 4 x 10 = 280 shipped runs + 20 x 2 x 5 = 200 generated runs: several sessions).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=bench/closed_loop/out/matrix
 APP=build/pepper_app/pepper_app
 SIZE=640x480
 STARTS=10
+GEN_STARTS=5
+GEN_SEEDS=20
 JOBS=2
 SHARD=1/1
 ONLY=.
@@ -33,11 +42,13 @@ while [[ $# -gt 0 ]]; do
     --app) APP=$2; shift 2 ;;
     --size) SIZE=$2; shift 2 ;;
     --starts) STARTS=$2; shift 2 ;;
+    --gen-starts) GEN_STARTS=$2; shift 2 ;;
+    --gen-seeds) GEN_SEEDS=$2; shift 2 ;;
     --jobs) JOBS=$2; shift 2 ;;
     --shard) SHARD=$2; shift 2 ;;
     --only) ONLY=$2; shift 2 ;;
     --list) LIST=1; shift ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
     *) echo "matrix.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -45,12 +56,21 @@ WORLDS=(robotics_room room_corridor_room white_corridor window_corridor)
 # name|evaluate arguments
 CONFIGS=()
 for w in "${WORLDS[@]}"; do
-  CONFIGS+=("${w}_none|--world worlds/$w.yaml --disturbance none")
-  CONFIGS+=("${w}_light0.6|--world worlds/$w.yaml --disturbance light --light-factor 0.6")
-  CONFIGS+=("${w}_light1.4|--world worlds/$w.yaml --disturbance light --light-factor 1.4")
+  S="--starts $STARTS --world worlds/$w.yaml"
+  CONFIGS+=("${w}_none|$S --disturbance none")
+  CONFIGS+=("${w}_light0.6|$S --disturbance light --light-factor 0.6")
+  CONFIGS+=("${w}_light1.4|$S --disturbance light --light-factor 1.4")
   for d in furniture person drops latency; do
-    CONFIGS+=("${w}_$d|--world worlds/$w.yaml --disturbance $d")
+    CONFIGS+=("${w}_$d|$S --disturbance $d")
   done
+done
+GEN_KINDS=(building room corridor)  # by seed % 3
+gen_world() { echo "gen_${GEN_KINDS[$(( $1 % 3 ))]}_$1"; }
+for (( seed = 1; seed <= GEN_SEEDS; ++seed )); do
+  g=$(gen_world "$seed")
+  S="--starts $GEN_STARTS --world $OUT/worlds/$g.yaml"
+  CONFIGS+=("${g}_none|$S --disturbance none")
+  CONFIGS+=("${g}_light0.7|$S --disturbance light --light-factor 0.7")
 done
 I=${SHARD%/*}
 N=${SHARD#*/}
@@ -64,18 +84,31 @@ if (( LIST )); then
   exit 0
 fi
 [[ -x $APP ]] || { echo "matrix.sh: $APP not found: build first (scripts/build.sh)" >&2; exit 2; }
-mkdir -p "$OUT"
+mkdir -p "$OUT/worlds"
+# The generated worlds the selected configurations need, written before any run starts.
+for c in "${SELECTED[@]}"; do
+  name=${c%%|*}
+  [[ $name == gen_* ]] || continue
+  g=${name%_*}
+  seed=${g##*_}
+  kind=${g#gen_}
+  kind=${kind%_*}
+  if [[ ! -s $OUT/worlds/$g.yaml ]]; then
+    "$APP" world generate --seed "$seed" --kind "$kind" --out "$OUT/worlds/$g.yaml" \
+        --textures worlds/textures > /dev/null
+  fi
+done
 run_one() {
   local name=${1%%|*} args=${1#*|}
   if [[ -s $OUT/$name.json ]]; then echo "skip $name (done)"; return 0; fi
   echo "$(date +%T) start $name"
   # shellcheck disable=SC2086
-  "$APP" evaluate $args --starts "$STARTS" --seed 1 --size "$SIZE" --json "$OUT/$name.json.tmp" \
+  "$APP" evaluate $args --seed 1 --size "$SIZE" --json "$OUT/$name.json.tmp" \
       > "$OUT/$name.txt" 2> "$OUT/$name.log" || true
   if [[ -s $OUT/$name.json.tmp ]]; then mv "$OUT/$name.json.tmp" "$OUT/$name.json"; fi
   echo "$(date +%T) done  $name"
 }
 export -f run_one
-export OUT APP STARTS SIZE
+export OUT APP SIZE
 printf '%s\n' "${SELECTED[@]}" | xargs -d '\n' -P "$JOBS" -I{} bash -c 'run_one "$@"' _ {}
 echo "tables: bench/closed_loop/combine.py $OUT/*.json"

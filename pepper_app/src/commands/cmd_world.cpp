@@ -1,7 +1,9 @@
-// `pepper_app world check|render`: inspect the simulated worlds of the mock robot
-// (sim/, docs/mock_robot.md).
+// `pepper_app world check|render|generate`: inspect the simulated worlds of the mock robot, or
+// write a generated one (sim/, docs/mock_robot.md).
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
@@ -11,6 +13,7 @@
 #include "commands/commands.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/world.hpp"
+#include "sim/world_generator.hpp"
 
 namespace pepper::app {
 
@@ -26,6 +29,11 @@ struct WorldArgs {
   double noise_sigma = 1.5;
   uint64_t seed = 1;
   std::string out;
+  // generate
+  std::string kind = "building";
+  std::string textures = std::string(PEPPER_WORLDS_DIR) + "/textures";
+  double poor_view_fraction = sim::WorldGeneratorOptions{}.poor_view_fraction;
+  double blank_view_prob = sim::WorldGeneratorOptions{}.blank_view_prob;
 };
 
 bool parse_pose(const std::string& s, sim::Pose2D& pose) {
@@ -81,13 +89,73 @@ int run_render(const WorldArgs& a) {
   return 0;
 }
 
+// Writes the generated world, then loads it back as any world file (textures, validation), so
+// that a file this command writes always loads.
+int run_generate(const WorldArgs& a) {
+  namespace fs = std::filesystem;
+  sim::WorldGeneratorOptions o;
+  o.seed = a.seed;
+  try {
+    o.kind = sim::world_kind_from_string(a.kind);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "pepper_app world generate: --kind: " << e.what() << "\n";
+    return 2;
+  }
+  o.poor_view_fraction = a.poor_view_fraction;
+  o.blank_view_prob = a.blank_view_prob;
+  const fs::path out = fs::absolute(a.out);
+  const fs::path textures = fs::absolute(a.textures);
+  if (!fs::exists(textures / "pepper_office_a.jpg")) {
+    std::cerr << "pepper_app world generate: --textures: '" << a.textures
+              << "' does not hold the shipped photographs (worlds/textures/pepper_office_a.jpg "
+                 "...)\n";
+    return 2;
+  }
+  // Relative to the world file's folder, as the shipped worlds write them, when both are in one
+  // tree (their first two components agree, e.g. a checkout under /work); absolute otherwise
+  // (e.g. a world in /tmp).
+  const auto head = [](const fs::path& p) {
+    const fs::path n = p.lexically_normal();
+    fs::path r;
+    int k = 0;
+    for (const fs::path& part : n) {
+      if (k++ == 2) break;
+      r /= part;
+    }
+    return r;
+  };
+  o.texture_dir = head(out.parent_path()) == head(textures)
+                      ? textures.lexically_relative(out.parent_path()).generic_string()
+                      : textures.lexically_normal().generic_string();
+  if (o.texture_dir.empty()) o.texture_dir = textures.generic_string();
+  const auto errors = o.validate();
+  if (!errors.empty()) {
+    std::cerr << "pepper_app world generate: " << errors.front() << "\n";
+    return 2;
+  }
+  const sim::GeneratedWorld g = sim::generate_world(o);
+  if (!out.parent_path().empty()) fs::create_directories(out.parent_path());
+  {
+    std::ofstream f(out);
+    if (!(f << g.yaml)) {
+      std::cerr << "pepper_app world generate: cannot write '" << a.out << "'\n";
+      return 1;
+    }
+  }
+  const sim::World w = sim::load_world(out);
+  std::cout << "wrote " << a.out << ": " << g.summary() << "\n";
+  std::cout << "  " << w.quads.size() << " quads, " << w.walls.size() << " wall segments, "
+            << w.boxes.size() << " box obstacles\n";
+  return 0;
+}
+
 }  // namespace
 
 void register_world_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "world",
-      "Inspect a simulated world of the mock robot: check it, or render the view of the "
-      "top head camera from a pose.");
+      "Inspect a simulated world of the mock robot: check it, render the view of the "
+      "top head camera from a pose, or generate a random one.");
   cmd->require_subcommand(1);
   auto args = std::make_shared<WorldArgs>();
 
@@ -128,6 +196,37 @@ void register_world_command(CLI::App& app) {
       exit_code() = run_render(*args);
     } catch (const std::exception& e) {
       std::cerr << "pepper_app world render: " << e.what() << "\n";
+      exit_code() = 1;
+    }
+  });
+
+  auto* gen = cmd->add_subcommand(
+      "generate",
+      "Write a random but plausible indoor world (rooms, corridors, doors, turns of 45 to 180 "
+      "degrees on the spot and on arcs, furniture, posters, lamps, blank walls at some turns) "
+      "with its taught tour and replay starts. The same seed and kind give the same file.");
+  gen->add_option("--seed", args->seed, "World seed (any integer)")->required();
+  gen->add_option("--kind", args->kind, "room, corridor or building")->capture_default_str();
+  gen->add_option("--out", args->out, "Output world file (.yaml)")->required();
+  gen->add_option("--textures", args->textures,
+                  "Folder of the shipped photographs (default: this build's checkout; written "
+                  "relative to the output's folder when both are in one tree)")
+      ->capture_default_str();
+  gen->add_option("--poor-view-fraction", args->poor_view_fraction,
+                  "Fraction of seeds whose every turn and end face blank walls (issue 29)")
+      ->capture_default_str();
+  gen->add_option("--blank-view-prob", args->blank_view_prob,
+                  "In the other worlds, chance that one turn's view is blank")
+      ->capture_default_str();
+  gen->footer(
+      "Example:\n  pepper_app world generate --seed 7 --kind corridor --out gen/c7.yaml\n"
+      "then, e.g.: pepper_app evaluate --world gen/c7.yaml --starts 2 --size 320x240\n"
+      "Format, pool and knobs: docs/mock_robot.md (Generated worlds).");
+  gen->callback([args] {
+    try {
+      exit_code() = run_generate(*args);
+    } catch (const std::exception& e) {
+      std::cerr << "pepper_app world generate: " << e.what() << "\n";
       exit_code() = 1;
     }
   });
