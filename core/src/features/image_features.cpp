@@ -128,7 +128,40 @@ std::vector<std::string> KltOptions::validate() const {
   check_range(e, "klt.prior_window_px", prior_window_px, 5, 101);
   if (prior_window_px % 2 == 0)
     e.push_back("klt.prior_window_px = " + std::to_string(prior_window_px) + " must be odd");
+  if (normalise_window_px != 0 && (normalise_window_px < 3 || normalise_window_px > 101 ||
+                                   normalise_window_px % 2 == 0)) {
+    e.push_back("klt.normalise_window_px = " + std::to_string(normalise_window_px) +
+                " must be 0 (off) or odd in [3, 101]");
+  }
   return e;
+}
+
+cv::Mat klt_image(const cv::Mat& gray, const KltOptions& options) {
+  if (options.normalise_window_px == 0) return gray;
+  // Standard deviations below this (grey levels) are taken as this: a uniform wall with sensor
+  // noise (sigma ~2-3) is not amplified into texture. 6 is below the contrast of the weakest
+  // corners FAST keeps (threshold 20 on a 16-pixel ring) even at x0.6.
+  constexpr float kMinSigma = 6.0f;
+  // Output scale: 32 grey levels per standard deviation keeps +-4 sigma inside 0..255.
+  constexpr float kScale = 32.0f;
+  cv::Mat f, mean, mean_sq;
+  gray.convertTo(f, CV_32F);
+  const cv::Size win(options.normalise_window_px, options.normalise_window_px);
+  cv::boxFilter(f, mean, CV_32F, win, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+  cv::boxFilter(f.mul(f), mean_sq, CV_32F, win, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
+  cv::Mat out(gray.size(), CV_8UC1);
+  for (int y = 0; y < gray.rows; ++y) {
+    const float* pf = f.ptr<float>(y);
+    const float* pm = mean.ptr<float>(y);
+    const float* pq = mean_sq.ptr<float>(y);
+    uint8_t* po = out.ptr<uint8_t>(y);
+    for (int x = 0; x < gray.cols; ++x) {
+      const float var = std::max(pq[x] - pm[x] * pm[x], 0.0f);
+      const float sigma = std::max(std::sqrt(var), kMinSigma);
+      po[x] = cv::saturate_cast<uint8_t>(128.0f + kScale * (pf[x] - pm[x]) / sigma);
+    }
+  }
+  return out;
 }
 
 std::vector<std::string> FeatureExtractorOptions::validate() const {
@@ -162,7 +195,8 @@ void build_klt_pyramid(ImageFeatures& f, const KltOptions& options, bool with_de
   const auto errors = options.validate();
   if (!errors.empty()) throw std::invalid_argument("build_klt_pyramid: " + join(errors));
   f.klt_pyramid.clear();
-  cv::buildOpticalFlowPyramid(f.gray, f.klt_pyramid, cv::Size(options.window_px, options.window_px),
+  cv::buildOpticalFlowPyramid(klt_image(f.gray, options), f.klt_pyramid,
+                              cv::Size(options.window_px, options.window_px),
                               options.max_level, with_derivatives);
   f.klt_pyramid_options = options;
 }
@@ -207,7 +241,7 @@ ImageFeatures FeatureExtractor::extract(const cv::Mat& gray, unsigned parts) con
                      ? camera_
                      : camera_.scaled_to(gray.cols, gray.rows);
   f.gray = gray;
-  if (parts & kPartLines) f.lines = detect_lines(gray, f.intrinsics, options_, f.line_descriptors);
+  if (parts & kPartLines) f.lines = detect_lines(klt_image(gray, options_.klt), f.intrinsics, options_, f.line_descriptors);
   else f.line_descriptors = cv::Mat(0, kLbdDims, CV_32F);
   if (parts & kPartCorners) f.corners_px = detect_corners(gray, options_);
   // ORB needs room for its 31 px patches on its pyramid (smaller images: no keypoints).

@@ -136,6 +136,7 @@ void run_lk(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
             std::vector<cv::Point2f>& b_pts, std::vector<uchar>& status, std::vector<float>& err) {
   auto usable = [&](const ImageFeatures& f) {
     return !f.klt_pyramid.empty() && f.klt_pyramid_options.window_px == k.window_px &&
+           f.klt_pyramid_options.normalise_window_px == k.normalise_window_px &&
            f.klt_pyramid_options.max_level >= k.max_level;
   };
   const bool a_pyr = usable(a), b_pyr = usable(b);
@@ -147,11 +148,11 @@ void run_lk(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
     cv::calcOpticalFlowPyrLK(a.klt_pyramid, b.klt_pyramid, a_pts, b_pts, status, err, win,
                              max_level, crit, flags, k.min_eig_threshold);
   } else if (b_pyr) {
-    cv::calcOpticalFlowPyrLK(a.gray, b.klt_pyramid, a_pts, b_pts, status, err, win, max_level, crit,
-                             flags, k.min_eig_threshold);
+    cv::calcOpticalFlowPyrLK(klt_image(a.gray, k), b.klt_pyramid, a_pts, b_pts, status, err, win,
+                             max_level, crit, flags, k.min_eig_threshold);
   } else {
-    cv::calcOpticalFlowPyrLK(a.gray, b.gray, a_pts, b_pts, status, err, win, max_level, crit, flags,
-                             k.min_eig_threshold);
+    cv::calcOpticalFlowPyrLK(klt_image(a.gray, k), klt_image(b.gray, k), a_pts, b_pts, status, err,
+                             win, max_level, crit, flags, k.min_eig_threshold);
   }
   const float w = static_cast<float>(b.image_size.width), h = static_cast<float>(b.image_size.height);
   for (size_t i = 0; i < status.size(); ++i) {
@@ -615,6 +616,8 @@ FrameMatcher::FrameMatcher(ImageFeatures current, const MatcherOptions& options)
   check_image(current_, "FrameMatcher (current)");
   const bool ok = !current_.klt_pyramid.empty() &&
                   current_.klt_pyramid_options.window_px == options_.klt.window_px &&
+                  current_.klt_pyramid_options.normalise_window_px ==
+                      options_.klt.normalise_window_px &&
                   current_.klt_pyramid_options.max_level >= options_.klt.max_level;
   if (!ok) build_klt_pyramid(current_, options_.klt, false);  // only tracked into: no derivatives
 }

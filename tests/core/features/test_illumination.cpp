@@ -1,0 +1,222 @@
+// Verified matches under a light change (issue 26): real image pairs (Pepper's own key images,
+// shared/data/pepper_qut_tmap, and visp-images-data's mbt/cube sequence) with the current image's
+// brightness scaled by x0.6 and x1.4, globally and as a gradient across the image. The verified
+// point and line counts must keep a stated fraction of the unchanged pair's, and the verified
+// sets must stay clean: a point is an outlier when it lies off the unchanged pair's epipolar
+// geometry (Sampson distance above 2 px at QVGA, 4 px at VGA), a line when the key line it joins was matched to a
+// different current line in the unchanged pair.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/features/image_features.hpp"
+#include "core/features/matching.hpp"
+
+namespace pepper::core::features {
+namespace {
+
+const std::string kPepper = std::string(PEPPER_SHARED_DIR) + "/data/pepper_qut_tmap/Edge_01/";
+const std::string kVispCube = "/usr/share/visp-images-data/ViSP-images/mbt/cube/";
+
+CameraIntrinsics pepper_qvga() {
+  CameraIntrinsics k;  // shared/data/README.md
+  k.width_px = 320;
+  k.height_px = 240;
+  k.fx_px = 298.13;
+  k.fy_px = 298.72;
+  k.cx_px = 159.15;
+  k.cy_px = 118.91;
+  return k;
+}
+
+CameraIntrinsics cube_camera() {
+  CameraIntrinsics k;  // ViSP-images/mbt/cube.xml
+  k.width_px = 640;
+  k.height_px = 480;
+  k.fx_px = 547.7367575;
+  k.fy_px = 542.0744058;
+  k.cx_px = 338.7036994;
+  k.cy_px = 234.5083345;
+  return k;
+}
+
+enum class Light { kSame, kDark, kBright, kGradient };
+const char* name(Light l) {
+  switch (l) {
+    case Light::kSame: return "x1.0";
+    case Light::kDark: return "x0.6";
+    case Light::kBright: return "x1.4";
+    case Light::kGradient: return "x0.6..1.4";
+  }
+  return "?";
+}
+
+// The light change of a scene seen by a camera with fixed exposure: every grey level scaled
+// (saturating at 255); the gradient runs from x0.6 at the left edge to x1.4 at the right.
+cv::Mat relight(const cv::Mat& gray, Light l) {
+  cv::Mat out(gray.size(), CV_8UC1);
+  for (int y = 0; y < gray.rows; ++y) {
+    for (int x = 0; x < gray.cols; ++x) {
+      double g = 1.0;
+      if (l == Light::kDark) g = 0.6;
+      if (l == Light::kBright) g = 1.4;
+      if (l == Light::kGradient) g = 0.6 + 0.8 * x / std::max(1, gray.cols - 1);
+      out.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(g * gray.at<uint8_t>(y, x));
+    }
+  }
+  return out;
+}
+
+struct PairResult {
+  int points = 0, lines = 0;
+  int point_outliers = 0, line_outliers = 0;
+};
+
+double sampson_px(const cv::Matx33d& E, const cv::Point2d& a, const cv::Point2d& b, double f) {
+  const cv::Vec3d xa(a.x, a.y, 1.0), xb(b.x, b.y, 1.0);
+  const cv::Vec3d Ea = E * xa, Etb = E.t() * xb;
+  const double num = xb.dot(Ea);
+  const double den = Ea[0] * Ea[0] + Ea[1] * Ea[1] + Etb[0] * Etb[0] + Etb[1] * Etb[1];
+  return den > 0 ? std::abs(num) / std::sqrt(den) * f : 0.0;
+}
+
+// Matches key -> relit current, judged against key -> unchanged current.
+PairResult measure(const FeatureExtractor& ex, const cv::Mat& key_gray, const cv::Mat& cur_gray,
+                   Light l, double focal_px) {
+  // 2 px at QVGA (the unchanged pair's own E is an estimate too), as many pixels of a larger
+  // image as there are of QVGA's.
+  constexpr double kMaxSampsonQvgaPx = 2.0;
+  const double px_scale = key_gray.cols / 320.0;
+  const ImageFeatures key = ex.extract(key_gray);
+  const ImageFeatures ref_cur = ex.extract(cur_gray);
+  const TwoViewMatches ref = match_two_view(key, ref_cur);
+  const ImageFeatures cur = ex.extract(relight(cur_gray, l));
+  const TwoViewMatches m = match_two_view(key, cur);
+  PairResult r;
+  r.points = m.n_points();
+  r.lines = m.n_lines();
+  for (const PointMatch& p : m.points) {
+    if (ref.essential_found &&
+        sampson_px(ref.E_b_a, p.a_norm, p.b_norm, focal_px) > kMaxSampsonQvgaPx * px_scale) {
+      ++r.point_outliers;
+    }
+  }
+  for (const LineMatch& lm : m.lines) {
+    const auto it = std::find_if(ref.lines.begin(), ref.lines.end(),
+                                 [&](const LineMatch& q) { return q.idx_a == lm.idx_a; });
+    if (it == ref.lines.end()) continue;  // not matched in the unchanged pair: unknown
+    // The same image line as the unchanged pair's match (the relit image's segment may be
+    // longer or shorter): both endpoints within 2 px of its supporting line, directions within
+    // 2 degrees.
+    const LineSegment& a = cur.lines[static_cast<size_t>(lm.idx_b)];
+    const LineSegment& b = ref_cur.lines[static_cast<size_t>(it->idx_b)];
+    const cv::Point2f db = b.p1_px - b.p0_px, da = a.p1_px - a.p0_px;
+    const double nb = std::hypot(db.x, db.y), na = std::hypot(da.x, da.y);
+    auto off_line = [&](const cv::Point2f& p) {
+      const cv::Point2f q = p - b.p0_px;
+      return std::abs(q.x * db.y - q.y * db.x) / nb;
+    };
+    const double cos_angle = std::abs(da.x * db.x + da.y * db.y) / (na * nb);
+    if (off_line(a.p0_px) > 2.0 || off_line(a.p1_px) > 2.0 || cos_angle < std::cos(5.0 * M_PI / 180)) {
+      ++r.line_outliers;
+    }
+  }
+  return r;
+}
+
+struct Totals {
+  PairResult sum[4];
+};
+
+Totals run_pairs(const FeatureExtractor& ex, const std::vector<std::pair<cv::Mat, cv::Mat>>& pairs,
+                 double focal_px, const char* what) {
+  Totals t;
+  for (const auto& [key, cur] : pairs) {
+    for (const Light l : {Light::kSame, Light::kDark, Light::kBright, Light::kGradient}) {
+      const PairResult r = measure(ex, key, cur, l, focal_px);
+      PairResult& s = t.sum[static_cast<int>(l)];
+      s.points += r.points;
+      s.lines += r.lines;
+      s.point_outliers += r.point_outliers;
+      s.line_outliers += r.line_outliers;
+    }
+  }
+  for (const Light l : {Light::kSame, Light::kDark, Light::kBright, Light::kGradient}) {
+    const PairResult& s = t.sum[static_cast<int>(l)];
+    std::printf("%s %-10s points %4d (outliers %3d)  lines %4d (outliers %3d)\n", what, name(l),
+                s.points, s.point_outliers, s.lines, s.line_outliers);
+  }
+  return t;
+}
+
+cv::Mat read_gray(const std::string& path) {
+  const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (img.empty()) throw std::runtime_error("cannot read " + path);
+  return to_gray(img);
+}
+
+// Bounds: every light keeps >= 85 % of the unchanged pair's verified points and <= 2 % point
+// outliers. Lines keep >= 85 % except at x1.4 (lines_bright): brightening saturates the light
+// parts of the image and the edges there are gone (no method gets them back). A line "outlier"
+// here is a line match that disagrees with the unchanged pair's; the comparison itself has a
+// floor (re-detected segments differ a little): 2.0 % of the lines disagree at x0.97 on the
+// Pepper pairs, hence a bound of 6 % rather than 2 %.
+// Where the light saturates (x1.4 and the gradient's bright side) the cube's white faces leave
+// flat 255 patches that tracks slide along: up to 3 % point outliers there (measured 2.9 %,
+// `saturating_outliers`); 2 % where nothing saturates.
+void expect_robust(const Totals& t, double lines_bright, double saturating_outliers = 0.02) {
+  const PairResult& same = t.sum[0];
+  for (const Light l : {Light::kDark, Light::kBright, Light::kGradient}) {
+    const PairResult& s = t.sum[static_cast<int>(l)];
+    EXPECT_GE(s.points, 0.85 * same.points) << name(l);
+    EXPECT_GE(s.lines, (l == Light::kBright ? lines_bright : 0.85) * same.lines) << name(l);
+    const double max_outliers = l == Light::kDark ? 0.02 : saturating_outliers;
+    EXPECT_LE(s.point_outliers, max_outliers * s.points + 1) << name(l);
+    EXPECT_LE(s.line_outliers, 0.06 * s.lines + 1) << name(l);
+  }
+}
+
+TEST(IlluminationData, PepperKeyImagesUnderLightChanges) {
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(kPepper)) {
+    if (e.path().extension() == ".png") files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 12u);
+  std::vector<std::pair<cv::Mat, cv::Mat>> pairs;
+  for (size_t i = 0; i + 1 < files.size() && pairs.size() < 10; i += 2) {
+    pairs.emplace_back(read_gray(files[i]), read_gray(files[i + 1]));
+  }
+  const FeatureExtractor ex(pepper_qvga());
+  // Measured (points, lines; of 1186, 430 unchanged): x0.6 1185, 430; x1.4 1066, 240; gradient
+  // 1173, 382. On raw grey levels (klt.normalise_window_px = 0; 1073, 471 unchanged): x0.6 8
+  // points, x1.4 239.
+  expect_robust(run_pairs(ex, pairs, pepper_qvga().fx_px, "pepper"), 0.5);
+}
+
+TEST(IlluminationData, VispCubeUnderLightChanges) {
+  if (!std::filesystem::exists(kVispCube + "image0000.pgm")) {
+    GTEST_SKIP() << "visp-images-data not installed";
+  }
+  std::vector<std::pair<cv::Mat, cv::Mat>> pairs;
+  for (int i : {0, 20, 40, 60}) {
+    char a[32], b[32];
+    std::snprintf(a, sizeof(a), "image%04d.pgm", i);
+    std::snprintf(b, sizeof(b), "image%04d.pgm", i + 5);
+    pairs.emplace_back(read_gray(kVispCube + a), read_gray(kVispCube + b));
+  }
+  const FeatureExtractor ex(cube_camera());
+  // Measured (of 328 points, 201 lines unchanged): x0.6 298, 196; x1.4 315, 193; gradient 304,
+  // 198. On raw grey levels (322 points unchanged): x0.6 0 points, x1.4 47.
+  expect_robust(run_pairs(ex, pairs, cube_camera().fx_px, "cube"), 0.85, 0.03);
+}
+
+}  // namespace
+}  // namespace pepper::core::features
