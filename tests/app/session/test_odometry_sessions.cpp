@@ -18,6 +18,7 @@
 #include "session/recording.hpp"
 #include "session/replay_session.hpp"
 #include "session/teach_session.hpp"
+#include "support/temp_dir.hpp"
 
 namespace pepper::app {
 namespace {
@@ -28,16 +29,11 @@ using namespace std::chrono_literals;
 
 const std::filesystem::path kWorlds = std::filesystem::path(PEPPER_SOURCE_DIR) / "worlds";
 
-std::filesystem::path fresh_dir(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("pepper_odometry_test_" + name);
-  std::filesystem::remove_all(p);
-  return p;
-}
-
-TeachSessionOptions scripted_teach(const std::string& name, double max_distance_m) {
+/// A scripted teach whose map and recording go into `dir` (a test's own TempDir).
+TeachSessionOptions scripted_teach(const std::filesystem::path& dir, double max_distance_m) {
   TeachSessionOptions o;
-  o.map_dir = fresh_dir(name + "_map");
-  o.recording_dir = fresh_dir(name + "_rec");
+  o.map_dir = dir / "map";
+  o.recording_dir = dir / "rec";
   o.camera.width_px = 320;
   o.camera.height_px = 240;
   o.scripted = true;
@@ -62,7 +58,8 @@ TEST(TeachOdometry, MapDistancesFromGetRobotPositionWithinTwoPercentOfGroundTrut
   qo.odometry_grace = 500ms;  // nor lose a reading to scheduling
   robot.bridge = std::make_unique<nb::qi::QiBridge>(qo);
   // 5 m straight, then into the first corner (robotics_room's loop turns left at x = 7).
-  const TeachSessionOptions o = scripted_teach("issue23", 6.5);
+  const test::TempDir dir("pepper_odometry_issue23");
+  const TeachSessionOptions o = scripted_teach(dir.path(), 6.5);
   SessionLink link(nullptr, nullptr);
   const TeachResult r = run_teach_session(robot, o, link);
   ASSERT_TRUE(r.ok()) << r.error;
@@ -113,7 +110,8 @@ TEST(TeachOdometry, WithoutOdometryTheCommandedSpeedMeasuresAndTeachWarns) {
   qo.watchdog_timeout = 5000ms;
   qo.read_odometry = false;  // as a robot without getRobotPosition
   robot.bridge = std::make_unique<nb::qi::QiBridge>(qo);
-  TeachSessionOptions o = scripted_teach("no_odometry", 0.0);
+  const test::TempDir dir("pepper_odometry_none");
+  TeachSessionOptions o = scripted_teach(dir.path(), 0.0);
   o.max_frames = 40;
   SessionLink link(nullptr, nullptr);
   const TeachResult r = run_teach_session(robot, o, link);
@@ -138,7 +136,8 @@ TEST(TeachOdometry, HeadingKeyImagesInsideABlankWalledTurn) {
   RobotConnection robot =
       open_robot("mock:" + (kWorlds / "room_corridor_room_no_board.yaml").string(), {});
   // 6 m to the corner at (7, 2.5), the turn, and 1.5 m up the corridor.
-  const TeachSessionOptions o = scripted_teach("heading", 8.5);
+  const test::TempDir dir("pepper_odometry_heading");
+  const TeachSessionOptions o = scripted_teach(dir.path(), 8.5);
   SessionLink link(nullptr, nullptr);
   const TeachResult r = run_teach_session(robot, o, link);
   ASSERT_TRUE(r.ok()) << r.error;
@@ -189,8 +188,9 @@ TEST(ReplayOdometry, FramesReachTheNavigatorWithOdometry) {
   o.camera.width_px = 320;
   o.camera.height_px = 240;
   o.max_frames = 30;
-  o.telemetry_jsonl = fresh_dir("replay_telemetry") += ".jsonl";
-  o.record_dir = fresh_dir("replay_rec");
+  const test::TempDir dir("pepper_odometry_replay");
+  o.telemetry_jsonl = dir.path() / "telemetry.jsonl";
+  o.record_dir = dir.path() / "rec";
   std::vector<std::optional<core::OdometryPose>> seen;
   const auto step = [&](const core::Frame& f) {
     seen.push_back(f.odom);
