@@ -103,12 +103,14 @@ void BM_GetImageRemoteVgaGreyTlsLogin(benchmark::State& s) {
 }
 void BM_GetImageRemoteQvgaGreyTcp(benchmark::State& s) { get_image_remote(s, false, 1, 320, 240); }
 
-/// The bridge path: one request always in flight while the previous frame is handed out.
-void BM_QiBridgeNextFrameVgaPipelined(benchmark::State& state) {
+/// The bridge path: one request always in flight while the previous frame is handed out; with
+/// the odometry read alongside each image (the default) or not, to show what it costs.
+void next_frame_vga_pipelined(benchmark::State& state, bool read_odometry) {
   Fixture fx(false);
   qi::QiBridgeOptions o;
   o.url = fx.server.url();
   o.head_resend_period = std::chrono::milliseconds(0);
+  o.read_odometry = read_odometry;
   qi::QiBridge bridge(o);
   bridge.connect();
   bridge.start_camera({});
@@ -121,6 +123,11 @@ void BM_QiBridgeNextFrameVgaPipelined(benchmark::State& state) {
   state.SetBytesProcessed(state.iterations() * 640 * 480);
   state.counters["frames_per_s"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+void BM_QiBridgeNextFrameVgaPipelined(benchmark::State& s) { next_frame_vga_pipelined(s, true); }
+void BM_QiBridgeNextFrameVgaPipelinedNoOdometry(benchmark::State& s) {
+  next_frame_vga_pipelined(s, false);
 }
 
 void move_round_trip(benchmark::State& state, bool tls) {
@@ -229,6 +236,7 @@ BENCHMARK(BM_GetImageRemoteVgaGreyTcp)->Unit(benchmark::kMillisecond)->UseRealTi
 BENCHMARK(BM_GetImageRemoteVgaGreyTlsLogin)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GetImageRemoteQvgaGreyTcp)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_QiBridgeNextFrameVgaPipelined)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_QiBridgeNextFrameVgaPipelinedNoOdometry)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MoveRoundTripTcp)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_MoveRoundTripTlsLogin)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_WatchdogStopLatency)->UseManualTime()->Iterations(30)->Unit(benchmark::kMillisecond);

@@ -51,6 +51,9 @@ std::optional<core::Frame> MockBridge::next_frame(std::chrono::milliseconds /*ti
   if (!camera_) throw BridgeError("MockBridge::next_frame: camera not started");
   core::Frame frame =
       on_robot([&] { return robot_.capture(camera_->width_px, camera_->height_px); });
+  // The wheel odometry at the capture's time (the simulated clock has not moved since): what
+  // QiBridge reads with ALMotion.getRobotPosition(true) for each frame.
+  frame.odom = robot_.odometry(sim::OdometrySource::kWheels);
   return wifi_.transmit(frame, robot_.now_ns());
 }
 

@@ -127,7 +127,8 @@ double BaseKinematics::gaussian() {
 }
 
 bool BaseKinematics::advance_to(int64_t t_end_ns,
-                                const std::function<bool(const Pose2D&, int64_t)>& blocked) {
+                                const std::function<bool(const Pose2D&, int64_t)>& blocked,
+                                const std::function<void(const BaseStep&)>& on_step) {
   const int64_t step_ns = std::max<int64_t>(1, std::llround(options_.step_s * 1e9));
   const bool noisy =
       options_.noise_rel > 0 || options_.noise_v_m_s > 0 || options_.noise_omega_rad_s > 0;
@@ -176,7 +177,8 @@ bool BaseKinematics::advance_to(int64_t t_end_ns,
       if (velocity_.v_x_m_s == 0 && velocity_.v_y_m_s == 0 && velocity_.omega_rad_s == 0) v = {};
     }
     const Pose2D before = pose_;
-    pose_ = integrate_constant(pose_, v, static_cast<double>(t_next - t_ns_) * 1e-9);
+    const double dt_s = static_cast<double>(t_next - t_ns_) * 1e-9;
+    pose_ = integrate_constant(pose_, v, dt_s);
     t_ns_ = t_next;
     if (blocked && blocked(pose_, t_ns_)) {
       pose_ = before;
@@ -184,6 +186,7 @@ bool BaseKinematics::advance_to(int64_t t_end_ns,
       t_ns_ = t_end_ns;
       return false;
     }
+    if (on_step) on_step({before, pose_, velocity_, dt_s});
   }
   return true;
 }

@@ -55,6 +55,7 @@ std::vector<std::string> MockRobotOptions::validate() const {
     errors.push_back("mount.camera_height_m must be in (0.1, 3) m");
   for (const auto& e : intrinsics_vga.validate()) errors.push_back("intrinsics_vga." + e);
   for (const auto& e : kinematics.validate()) errors.push_back("kinematics." + e);
+  for (const auto& e : odometry.validate()) errors.push_back("odometry." + e);
   for (const auto& e : render.validate()) errors.push_back("render." + e);
   return errors;
 }
@@ -71,6 +72,7 @@ MockRobot::MockRobot(std::shared_ptr<const World> world, MockRobotOptions option
     : world_(std::move(world)),
       options_(checked(options)),
       base_(options_.kinematics),
+      wheel_odometry_(options_.odometry),
       renderer_(options_.render) {
   if (!world_) throw std::invalid_argument("MockRobot: null world");
   light_ = world_->light(options_.lighting);
@@ -92,13 +94,18 @@ void MockRobot::advance_locked(int64_t t_end_ns) {
   }
   std::string hit;
   const double r = options_.robot_radius_m;
-  const bool free = base_.advance_to(t_end_ns, [&](const Pose2D& p, int64_t t_ns) {
+  const auto blocked = [&](const Pose2D& p, int64_t t_ns) {
     if (auto what = world_->collision({p.x_m, p.y_m}, r, static_cast<double>(t_ns) * 1e-9)) {
       hit = *what;
       return true;
     }
     return false;
-  });
+  };
+  const auto odometry_step = [&](const BaseStep& step) {
+    wheel_odometry_.on_step(step.before, step.after, step.dt_s);
+    command_odometry_ = integrate_constant(command_odometry_, step.controlled, step.dt_s);
+  };
+  const bool free = base_.advance_to(t_end_ns, blocked, odometry_step);
   if (!free) collision_ = CollisionEvent{base_.now_ns(), base_.pose(), hit};
 }
 
@@ -179,6 +186,12 @@ std::vector<double> MockRobot::joint_angles(const std::vector<std::string>& name
       throw SimError("MockRobot::joint_angles: unknown joint '" + n + "'");
   }
   return out;
+}
+
+core::OdometryPose MockRobot::odometry(OdometrySource source) const {
+  std::lock_guard lock(mutex_);
+  if (source == OdometrySource::kWheels) return wheel_odometry_.pose();
+  return {command_odometry_.x_m, command_odometry_.y_m, command_odometry_.yaw_rad};
 }
 
 int64_t MockRobot::now_ns() const {

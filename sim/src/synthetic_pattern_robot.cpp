@@ -62,6 +62,7 @@ void SyntheticPatternRobot::integrate_to_locked(int64_t t_ns) {
   const double dt_s = static_cast<double>(t_ns - integrated_t_ns_) * 1e-9;
   if (dt_s <= 0.0) return;
   // Exact unicycle integration for constant (v, omega) over dt (plus lateral velocity).
+  const Pose2 before = pose_;
   const double w = velocity_.omega_rad_s;
   const double yaw0 = pose_.yaw_rad;
   const double yaw1 = yaw0 + w * dt_s;
@@ -76,6 +77,8 @@ void SyntheticPatternRobot::integrate_to_locked(int64_t t_ns) {
   }
   pose_.yaw_rad = yaw1;
   integrated_t_ns_ = t_ns;
+  wheel_odometry_.on_step({before.x_m, before.y_m, before.yaw_rad},
+                          {pose_.x_m, pose_.y_m, pose_.yaw_rad}, dt_s);
 }
 
 core::Frame SyntheticPatternRobot::capture(int width_px, int height_px) {
@@ -178,6 +181,12 @@ std::vector<double> SyntheticPatternRobot::joint_angles(
 std::vector<CommandRecord> SyntheticPatternRobot::command_log() const {
   std::lock_guard lock(mutex_);
   return log_;
+}
+
+core::OdometryPose SyntheticPatternRobot::odometry(OdometrySource source) const {
+  std::lock_guard lock(mutex_);
+  if (source == OdometrySource::kWheels) return wheel_odometry_.pose();
+  return {pose_.x_m, pose_.y_m, std::remainder(pose_.yaw_rad, 2.0 * M_PI)};
 }
 
 SyntheticPatternRobot::Pose2 SyntheticPatternRobot::pose() const {

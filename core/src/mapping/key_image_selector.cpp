@@ -1,6 +1,7 @@
 #include "core/mapping/key_image_selector.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace pepper::core::mapping {
@@ -21,7 +22,25 @@ std::vector<std::string> KeyImageSelectorOptions::validate() const {
     errors.push_back("mapping.max_fraction = " + std::to_string(max_fraction) +
                      " must be in (relative, 1]");
   }
+  if (!(max_heading_change_rad >= 0.0 && max_heading_change_rad <= M_PI)) {
+    errors.push_back("mapping.max_heading_change_rad = " + std::to_string(max_heading_change_rad) +
+                     " must be in [0, pi] (0: off)");
+  }
   return errors;
+}
+
+const char* to_string(KeyImageRule rule) {
+  switch (rule) {
+    case KeyImageRule::kFirst:
+      return "first";
+    case KeyImageRule::kFeatures:
+      return "features";
+    case KeyImageRule::kHeading:
+      return "heading";
+    case KeyImageRule::kLast:
+      return "last";
+  }
+  return "?";
 }
 
 KeyImageSelector::KeyImageSelector(const KeyImageSelectorOptions& options) : options_(options) {
@@ -31,7 +50,8 @@ KeyImageSelector::KeyImageSelector(const KeyImageSelectorOptions& options) : opt
   threshold_ = options_.epsilon;
 }
 
-std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count) {
+std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count,
+                                                  std::optional<double> heading_change_rad) {
   if (finished_) throw std::invalid_argument("KeyImageSelector::on_frame after finish()");
   if (c != last_ + 1) {
     throw std::invalid_argument("KeyImageSelector::on_frame: frame " + std::to_string(c) +
@@ -46,9 +66,13 @@ std::optional<int64_t> KeyImageSelector::on_frame(int64_t c, int count) {
   }
   last_threshold_ = threshold_;
   last_reference_ = reference_;
-  if (count >= threshold_) return std::nullopt;
+  const bool few_features = count < threshold_;
+  const bool turned = options_.max_heading_change_rad > 0.0 && heading_change_rad &&
+                      std::abs(*heading_change_rad) > options_.max_heading_change_rad;
+  if (!few_features && !turned) return std::nullopt;
   const int64_t candidate = (c - 1 == key_) ? c : c - 1;
   if (candidate - key_ < options_.min_frame_gap) return std::nullopt;
+  last_rule_ = few_features ? KeyImageRule::kFeatures : KeyImageRule::kHeading;
   key_ = candidate;
   keys_.push_back(key_);
   // A new key image: its reference is measured again two frames later (when key_ == c, the
@@ -64,6 +88,7 @@ std::optional<int64_t> KeyImageSelector::finish() {
   if (last_ == key_) return std::nullopt;
   key_ = last_;
   keys_.push_back(key_);
+  last_rule_ = KeyImageRule::kLast;
   return key_;
 }
 

@@ -34,6 +34,7 @@ void Teacher::store_key(const Stored& s) {
   k.source_frame_index = s.source_frame_index;
   k.t_ns = s.t_ns;
   k.travelled_m = s.travelled_m;
+  k.odom = s.odom;
   k.features = s.features;
   k.features.klt_pyramid.clear();  // derived; the map does not keep it
   keys_.push_back(std::move(k));
@@ -52,6 +53,11 @@ TeachStep Teacher::add_frame(const Frame& frame, double travelled_m) {
     throw std::invalid_argument("Teacher::add_frame: travelled_m " + std::to_string(travelled_m) +
                                 " must be finite, >= 0 and never decrease");
   }
+  if (frame.odom && !(std::isfinite(frame.odom->x_m) && std::isfinite(frame.odom->y_m) &&
+                      std::isfinite(frame.odom->yaw_rad))) {
+    throw std::invalid_argument("Teacher::add_frame: frame " + std::to_string(frame.index) +
+                                " has non-finite odometry");
+  }
   if (frame.gray.empty() || frame.gray.type() != CV_8UC1) {
     throw std::invalid_argument("Teacher::add_frame: frame " + std::to_string(frame.index) +
                                 " is not a non-empty CV_8UC1 image");
@@ -65,6 +71,7 @@ TeachStep Teacher::add_frame(const Frame& frame, double travelled_m) {
   cur.source_frame_index = frame.index >= 0 ? frame.index : frames_;
   cur.t_ns = frame.t_ns;
   cur.travelled_m = travelled_m;
+  cur.odom = frame.odom;
   cur.frame_number = frames_;
 
   TeachStep step;
@@ -84,11 +91,16 @@ TeachStep Teacher::add_frame(const Frame& frame, double travelled_m) {
     }
     step.n_points_two_view = fm.two_view(kKeyId, key_->features).n_points();
     step.count = step.n_lines_three_view + step.n_points_two_view;
-    const auto k = selector_.on_frame(frames_, step.count);
+    if (cur.odom && key_->odom) {
+      step.heading_change_rad =
+          std::abs(std::remainder(cur.odom->yaw_rad - key_->odom->yaw_rad, 2.0 * M_PI));
+    }
+    const auto k = selector_.on_frame(frames_, step.count, step.heading_change_rad);
     step.threshold = selector_.last_threshold();
     step.reference_count = selector_.last_reference();
     if (k) {
       step.new_key_frame = *k;
+      step.new_key_rule = selector_.last_rule();
       key_ = (*k == frames_) ? cur : *prev_;
       store_key(*key_);
     }

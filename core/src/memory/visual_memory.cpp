@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -112,6 +113,7 @@ struct ManifestKey {
   int64_t source_frame_index = -1;
   int64_t t_ns = 0;
   double travelled_m = std::numeric_limits<double>::quiet_NaN();  // optional field
+  std::optional<OdometryPose> odom;                               // optional field
   std::string image, features;
   uint64_t image_bytes = 0, features_bytes = 0;
   uint32_t image_crc32 = 0, features_crc32 = 0;
@@ -124,6 +126,14 @@ struct Manifest {
   std::vector<ManifestKey> keys;
   int final_index = -1;
 };
+
+bool finite(const OdometryPose& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.yaw_rad);
+}
+
+json odom_to_json(const OdometryPose& p) {
+  return {{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}};
+}
 
 bool is_plain_file_name(const std::string& name) {
   return !name.empty() && name.find('/') == std::string::npos && name != "." && name != "..";
@@ -179,6 +189,15 @@ Manifest parse_manifest(const fs::path& dir) {
       } else if (!m.keys.empty() && !std::isnan(m.keys.back().travelled_m)) {
         throw malformed("key image " + std::to_string(m.keys.size()) +
                         ": travelled_m missing while earlier key images have it");
+      }
+      if (k.contains("odom")) {  // absent in maps taught without odometry or before it existed
+        const json& o = k.at("odom");
+        mk.odom = OdometryPose{o.at("x_m").get<double>(), o.at("y_m").get<double>(),
+                               o.at("yaw_rad").get<double>()};
+        if (!finite(*mk.odom)) {
+          throw malformed("key image " + std::to_string(m.keys.size()) +
+                          ": odom must hold finite x_m, y_m and yaw_rad");
+        }
       }
       mk.image = k.at("image").get<std::string>();
       mk.features = k.at("features").get<std::string>();
@@ -240,7 +259,7 @@ MapSummary summary_from_manifest(const Manifest& m) {
   s.camera = m.camera;
   for (const ManifestKey& k : m.keys) {
     s.key_images.push_back(
-        {k.source_frame_index, k.t_ns, k.lines, k.corners, k.keypoints, k.travelled_m});
+        {k.source_frame_index, k.t_ns, k.lines, k.corners, k.keypoints, k.travelled_m, k.odom});
   }
   if (!m.keys.empty()) {
     s.taught_duration_s = static_cast<double>(m.keys.back().t_ns - m.keys.front().t_ns) * 1e-9;
@@ -272,6 +291,13 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
                      dir.string() + ": key image " + std::to_string(i) + ": travelled_m " +
                          std::to_string(d) +
                          " must be given for every key image or none, >= 0 and never decreasing");
+    }
+  }
+  for (size_t i = 0; i < map.key_images.size(); ++i) {
+    if (map.key_images[i].odom && !finite(*map.key_images[i].odom)) {
+      throw MapError(
+          Kind::kInvalidMap, dir,
+          dir.string() + ": key image " + std::to_string(i) + ": odom must hold finite numbers");
     }
   }
   json parameters;
@@ -315,6 +341,7 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
                     {"corners", f.corners_px.size()},
                     {"keypoints", f.keypoints.size()}};
       if (with_travelled) entry["travelled_m"] = k.travelled_m;
+      if (k.odom) entry["odom"] = odom_to_json(*k.odom);
       keys.push_back(std::move(entry));
     }
     json manifest = {
@@ -377,6 +404,7 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
     key.source_frame_index = k.source_frame_index;
     key.t_ns = k.t_ns;
     key.travelled_m = k.travelled_m;
+    key.odom = k.odom;
     key.features = detail::decode_features(
         read_checked(feat_path, k.features_bytes, k.features_crc32), feat_path);
     const std::vector<uint8_t> png = read_checked(image_path, k.image_bytes, k.image_crc32);
@@ -412,7 +440,7 @@ MapSummary summarize(const VisualMemory& map) {
   for (const KeyImage& k : map.key_images) {
     s.key_images.push_back({k.source_frame_index, k.t_ns, static_cast<int>(k.features.lines.size()),
                             static_cast<int>(k.features.corners_px.size()),
-                            static_cast<int>(k.features.keypoints.size()), k.travelled_m});
+                            static_cast<int>(k.features.keypoints.size()), k.travelled_m, k.odom});
   }
   if (!map.key_images.empty()) {
     s.taught_duration_s =
@@ -444,7 +472,13 @@ std::string MapSummary::to_text() const {
     if (std::isnan(driven_m)) {
       os << "unknown (no odometry in this map: segments are measured by taught time)\n";
     } else {
-      os << std::setprecision(2) << driven_m << " m (commanded during teach)\n";
+      // Teach measures with the robot's odometry where its frames had it (drive_odometer.hpp),
+      // and the map keeps that odometry with each key image.
+      const bool odometry = std::all_of(key_images.begin(), key_images.end(),
+                                        [](const PerKeyImage& k) { return k.odom.has_value(); });
+      os << std::setprecision(2) << driven_m
+         << (odometry ? " m (the robot's odometry during teach)\n"
+                      : " m (commanded during teach)\n");
     }
   }
   for (size_t i = 0; i < key_images.size(); ++i) {
@@ -453,6 +487,10 @@ std::string MapSummary::to_text() const {
        << static_cast<double>(k.t_ns) * 1e-9 << " s: " << k.lines << " lines, " << k.corners
        << " corners, " << k.keypoints << " keypoints";
     if (!std::isnan(k.travelled_m)) os << std::setprecision(2) << ", at " << k.travelled_m << " m";
+    if (k.odom) {
+      os << std::setprecision(2) << ", odom (" << k.odom->x_m << ", " << k.odom->y_m << ") m "
+         << std::setprecision(1) << k.odom->yaw_rad * 180.0 / M_PI << " deg";
+    }
     os << "\n";
   }
   return os.str();

@@ -5,12 +5,13 @@
 // Semantics: connect() only changes the state; start_camera() records the requested size (the
 // frame rate is the SimRobot's own lockstep rate); next_frame() captures one frame (advancing the
 // simulated clock one frame period) and passes it through the WiFi model, so it returns nullopt
-// when that frame is dropped or still in flight; lock_head() sets HeadYaw/HeadPitch and reads them
-// back; move() forwards to command_velocity(); stop() calls stop_move() and never throws.
-// Every call that reaches the base is appended to log() with the simulated time.
-// Failure: calls before connect() (or next_frame() before start_camera()) throw BridgeError; so
-// does a request the simulated robot refuses (its sim::SimError, with the same text).
-// Thread-safety: methods lock an internal mutex; stop() may be called from any thread.
+// when that frame is dropped or still in flight; each frame carries the robot's wheel odometry
+// read right after its capture (Frame::odom, SimRobot::odometry(kWheels)); lock_head() sets
+// HeadYaw/HeadPitch and reads them back; move() forwards to command_velocity(); stop() calls
+// stop_move() and never throws. Every call that reaches the base is appended to log() with the
+// simulated time. Failure: calls before connect() (or next_frame() before start_camera()) throw
+// BridgeError; so does a request the simulated robot refuses (its sim::SimError, with the same
+// text). Thread-safety: methods lock an internal mutex; stop() may be called from any thread.
 
 #include <mutex>
 #include <optional>

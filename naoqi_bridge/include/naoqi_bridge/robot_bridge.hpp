@@ -75,7 +75,9 @@ class RobotBridge {
   virtual core::CameraIntrinsics start_camera(const CameraRequest& request) = 0;
 
   /// The next frame newer than the previous one returned, or nullopt if none arrived within
-  /// `timeout`. Frames carry the robot's capture timestamp. Throws BridgeError on a lost link.
+  /// `timeout`. Frames carry the robot's capture timestamp and, where the robot gives it, its
+  /// odometry read with the frame (Frame::odom; a failure to read it leaves it empty and is not
+  /// an error: odometry_problem()). Throws BridgeError on a lost link.
   virtual std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) = 0;
 
   /// Stiffens and holds head (and hip/knee) joints, turns autonomous head motion off, and reads
@@ -95,6 +97,10 @@ class RobotBridge {
 
   /// Human-readable description of where the bridge is connected, e.g. "tcp://10.0.0.5:9559".
   virtual std::string describe() const = 0;
+
+  /// Why the last frame came without the robot's odometry (Frame::odom empty), for the session
+  /// to report; "" when it had it. Bridges that always fill it keep this default.
+  virtual std::string odometry_problem() const { return {}; }
 };
 
 }  // namespace pepper::naoqi_bridge

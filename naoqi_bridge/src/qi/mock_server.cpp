@@ -424,6 +424,17 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       last_velocity = {};
       return Value();
     });
+    // useSensors = true: the simulated wheel odometry (drifts); false: the commanded motion
+    // integrated, as NAOqi answers (PROTOCOL.md 7.1). [x, y, theta] in the odometry frame.
+    motion.add(180, "getRobotPosition", "(b)", "[f]",
+               [this](ConnState&, A a) {
+                 const core::OdometryPose p =
+                     robot.odometry(a[0].as_bool() ? sim::OdometrySource::kWheels
+                                                   : sim::OdometrySource::kCommands);
+                 return Value::floats({static_cast<float>(p.x_m), static_cast<float>(p.y_m),
+                                       static_cast<float>(p.yaw_rad)});
+               },
+               {"useSensors"});
     motion.add(183, "getRobotVelocity", "()", "[f]", [this](ConnState&, A) {
       std::lock_guard lock(mutex);
       return Value::floats({static_cast<float>(last_velocity.v_x_m_s),

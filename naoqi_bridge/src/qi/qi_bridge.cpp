@@ -56,6 +56,7 @@ std::vector<std::string> QiBridgeOptions::validate() const {
   range("reconnect_max_backoff", reconnect_max_backoff, 0, 600000);
   range("head_settle_timeout", head_settle_timeout, 0, 60000);
   range("head_resend_period", head_resend_period, 0, 60000);
+  range("odometry_grace", odometry_grace, 0, 1000);
   if (watchdog_period >= watchdog_timeout) {
     errors.push_back("watchdog_period must be shorter than watchdog_timeout");
   }
@@ -180,6 +181,15 @@ void QiBridge::open_session() {
     life_ = std::move(life);
     awareness_ = std::move(awareness);
     inflight_ = PendingCall();
+    odometry_inflight_ = PendingCall();
+    // Resolved by name and signature like every method; a robot without it gives frames
+    // without odometry (reported), not a failed connection.
+    odometry_available_ =
+        options_.read_odometry && motion_->meta.find("getRobotPosition", "(b)") != nullptr;
+    odometry_problem_.clear();
+    if (options_.read_odometry && !odometry_available_) {
+      odometry_problem_ = "ALMotion has no getRobotPosition(b): frames come without odometry";
+    }
   } catch (...) {
     state_ = ConnectionState::kDisconnected;
     session_->close();
@@ -265,6 +275,7 @@ void QiBridge::subscribe_camera_locked() {
   camera_handle_ = handle.as_string();
   last_t_ns_ = -1;
   inflight_ = PendingCall();
+  odometry_inflight_ = PendingCall();
 }
 
 core::CameraIntrinsics QiBridge::start_camera(const CameraRequest& request) {
@@ -278,8 +289,7 @@ core::CameraIntrinsics QiBridge::start_camera(const CameraRequest& request) {
     camera_ = request;
     resolution_code_ = code;
     subscribe_camera_locked();
-    inflight_ = request_image();
-    inflight_since_ = std::chrono::steady_clock::now();
+    request_frame_locked();
   } catch (...) {
     stop_base("exception in start_camera");
     throw;
@@ -292,11 +302,56 @@ PendingCall QiBridge::request_image() {
   return session_->call_async(*video_, "getImageRemote", "(s)", {Value::string(camera_handle_)});
 }
 
+void QiBridge::request_frame_locked() {
+  // The odometry first: a server that answers in order then answers it before the image, and
+  // its reply is a few bytes where the image's is hundreds of kilobytes.
+  odometry_inflight_ = odometry_available_ ? session_->call_async(*motion_, "getRobotPosition",
+                                                                  "(b)", {Value::boolean(true)})
+                                           : PendingCall();
+  inflight_ = request_image();
+  inflight_since_ = std::chrono::steady_clock::now();
+}
+
+std::optional<core::OdometryPose> QiBridge::take_odometry(PendingCall& call) {
+  if (!call.valid()) return std::nullopt;  // not asked: odometry_problem_ says why
+  std::string problem;
+  try {
+    const Value v = call.get(options_.odometry_grace);
+    const auto& e = v.elements();
+    if (e.size() == 3) {
+      const core::OdometryPose p{e[0].as_double(), e[1].as_double(), e[2].as_double()};
+      if (std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.yaw_rad)) {
+        std::lock_guard lock(mutex_);
+        odometry_problem_.clear();
+        return p;
+      }
+    }
+    problem = "ALMotion.getRobotPosition(true) returned " + v.to_debug_string() +
+              ", not three finite numbers";
+  } catch (const CallTimeout&) {
+    problem = "ALMotion.getRobotPosition(true): no reply within " + ms(options_.odometry_grace) +
+              " of the image";
+  } catch (const RemoteCallError& e) {
+    problem = e.what();
+  } catch (const ProtocolError& e) {
+    problem = std::string("ALMotion.getRobotPosition(true): ") + e.what();
+  }
+  std::lock_guard lock(mutex_);
+  odometry_problem_ = problem;
+  return std::nullopt;
+}
+
+std::string QiBridge::odometry_problem() const {
+  std::lock_guard lock(mutex_);
+  return odometry_problem_;
+}
+
 std::optional<core::Frame> QiBridge::next_frame(std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   try {
     for (;;) {
       PendingCall call;
+      PendingCall odometry_call;
       {
         std::lock_guard lock(mutex_);
         if (!camera_) throw BridgeError("next_frame called before start_camera");
@@ -306,10 +361,10 @@ std::optional<core::Frame> QiBridge::next_frame(std::chrono::milliseconds timeou
         if (!inflight_.valid() ||
             std::chrono::steady_clock::now() - inflight_since_ > options_.call_timeout) {
           // None in flight, or the robot dropped the request: ask again.
-          inflight_ = request_image();
-          inflight_since_ = std::chrono::steady_clock::now();
+          request_frame_locked();
         }
         call = inflight_;
+        odometry_call = odometry_inflight_;
       }
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
           deadline - std::chrono::steady_clock::now());
@@ -318,8 +373,7 @@ std::optional<core::Frame> QiBridge::next_frame(std::chrono::milliseconds timeou
       {
         // Keep the next request in flight while this frame is decoded and processed.
         std::lock_guard lock(mutex_);
-        inflight_ = request_image();
-        inflight_since_ = std::chrono::steady_clock::now();
+        request_frame_locked();
       }
       ImageRemote img;
       try {
@@ -331,6 +385,8 @@ std::optional<core::Frame> QiBridge::next_frame(std::chrono::milliseconds timeou
         session_->close();
         throw ProtocolViolation("ALVideoDevice.getImageRemote: " + why + " (connection closed)");
       }
+      // Outside the lock: take_odometry may wait up to odometry_grace.
+      std::optional<core::OdometryPose> odom = take_odometry(odometry_call);
       std::lock_guard lock(mutex_);
       if (img.t_ns() <= last_t_ns_) {
         ++counters_.stale_replies;
@@ -339,6 +395,8 @@ std::optional<core::Frame> QiBridge::next_frame(std::chrono::milliseconds timeou
       }
       last_t_ns_ = img.t_ns();
       core::Frame f;
+      f.odom = odom;
+      if (!odom) ++counters_.frames_without_odometry;
       f.gray.create(img.height_px, img.width_px, CV_8UC1);
       if (img.layers == 1) {
         std::memcpy(f.gray.data, img.pixels.data, img.pixels.size);

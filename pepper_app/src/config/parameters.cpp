@@ -445,6 +445,10 @@ std::vector<Parameter> build_table() {
     row("key_images.max_fraction",
         key_images, &KeyImages::max_fraction, "", "(relative, 1]",
         "relative rule: the threshold never exceeds this x that count (1: no cap)"),
+    row("key_images.max_heading_change_rad",
+        key_images, &KeyImages::max_heading_change_rad, "rad", "[0, pi]",
+        "also a key image when the odometry heading turned this much since the last one, so a "
+        "turn facing a blank wall still gets key images inside it (0: off; ~1/3 of the view)"),
 
     // navigator: NavigatorOptions (core/navigator/navigator.hpp)
     row("navigator.controller",

@@ -36,12 +36,14 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
                                                     const ProgressFn& progress,
                                                     std::vector<core::mapping::TeachStep>* steps) {
   const std::size_t total = recording.frames.size();
-  // Distance driven to each frame, from the recorded commands (NaN for plain image folders).
+  // Distance driven to each frame, from the recorded odometry where frames have it, else the
+  // recorded commands, as teach measured it (NaN for plain image folders).
   std::vector<double> travelled_m(total, std::numeric_limits<double>::quiet_NaN());
   if (recording.commands_known) {
     core::mapping::DriveOdometer odometer;
     for (std::size_t i = 0; i < total; ++i) {
-      travelled_m[i] = odometer.on_frame(recording.frames[i].t_ns, recording.frames[i].v_m_s);
+      const RecordedFrame& f = recording.frames[i];
+      travelled_m[i] = odometer.on_frame(f.t_ns, f.v_m_s, f.odom);
     }
   }
   const core::Frame first = load_frame(recording, 0);
@@ -61,6 +63,7 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
       key.source_frame_index = frame.index;
       key.t_ns = frame.t_ns;
       key.travelled_m = travelled_m[i];
+      key.odom = frame.odom;
       key.features = extractor.extract(frame.gray);
       map.key_images.push_back(std::move(key));
       if (progress) progress(i + 1, total);
@@ -101,6 +104,7 @@ nlohmann::json ReplayLogResult::to_json() const {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& f : frames) {
     list.push_back({{"frame_index", f.frame_index},
+                    {"odom", odometry_to_json(f.odom)},
                     {"command", command_to_json(f.command)},
                     {"telemetry", telemetry_to_json(f.telemetry)}});
   }
@@ -120,7 +124,7 @@ ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemor
     const core::navigator::StepResult step = navigator.step(frame);
     result.max_key_image_reached = std::max(result.max_key_image_reached, step.telemetry.in);
     if (step.telemetry.state == core::navigator::NavState::kTourComplete) result.reached_end = true;
-    result.frames.push_back({frame.index, step.command, step.telemetry});
+    result.frames.push_back({frame.index, frame.odom, step.command, step.telemetry});
     if (progress) progress(i + 1, total);
   }
   return result;

@@ -4,10 +4,10 @@
 // Frames are streamed from disk one at a time, so long recordings need little memory.
 
 #include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/mapping/teacher.hpp"
 #include "core/memory/visual_memory.hpp"
@@ -34,6 +34,7 @@ void write_teach_steps_csv(const std::vector<core::mapping::TeachStep>& steps,
 
 struct ReplayLogFrame {
   int64_t frame_index = 0;
+  std::optional<core::OdometryPose> odom;  ///< the recorded odometry the navigator was given
   core::navigator::Command command;
   core::navigator::Telemetry telemetry;
 };

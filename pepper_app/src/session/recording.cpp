@@ -4,11 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
-#include <sstream>
-
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "core/camera/intrinsics_json.hpp"
 
@@ -81,8 +81,15 @@ void RecordingWriter::append(const core::Frame& frame, double v_m_s, double omeg
     throw RecordingError(tmp_path.string() + ": cannot write frame");
   }
   fs::rename(tmp_path, final_path);
-  const json line{{"index", count_}, {"t_ns", frame.t_ns}, {"file", name.str()},
-                  {"v_m_s", v_m_s},  {"omega_rad_s", omega_rad_s}};
+  json line{{"index", count_},
+            {"t_ns", frame.t_ns},
+            {"file", name.str()},
+            {"v_m_s", v_m_s},
+            {"omega_rad_s", omega_rad_s}};
+  if (frame.odom) {
+    line["odom"] = {
+        {"x_m", frame.odom->x_m}, {"y_m", frame.odom->y_m}, {"yaw_rad", frame.odom->yaw_rad}};
+  }
   index_ << line.dump() << '\n';
   index_.flush();
   if (!index_) throw RecordingError((folder_ / "frames.jsonl").string() + ": write failed");
@@ -144,6 +151,22 @@ Recording read_recording(const fs::path& folder,
         throw RecordingError(index_path.string() + ": line " + std::to_string(line_no) +
                              ": v_m_s / omega_rad_s must be finite numbers");
       }
+      if (j.contains("odom")) {
+        const json& o = j["odom"];
+        const auto number = [&](const char* key) -> double {
+          if (!o.is_object() || !o.contains(key) || !o[key].is_number()) {
+            return std::numeric_limits<double>::quiet_NaN();
+          }
+          return o[key].get<double>();
+        };
+        f.odom = core::OdometryPose{number("x_m"), number("y_m"), number("yaw_rad")};
+        if (!std::isfinite(f.odom->x_m) || !std::isfinite(f.odom->y_m) ||
+            !std::isfinite(f.odom->yaw_rad)) {
+          throw RecordingError(
+              index_path.string() + ": line " + std::to_string(line_no) +
+              ": odom must be {\"x_m\", \"y_m\", \"yaw_rad\"} with finite numbers");
+        }
+      }
       rec.frames.push_back(std::move(f));
     }
   } else {
@@ -193,6 +216,7 @@ core::Frame load_frame(const Recording& recording, std::size_t i) {
   frame.gray = gray;
   frame.t_ns = rf.t_ns;
   frame.index = rf.index;
+  frame.odom = rf.odom;
   return frame;
 }
 

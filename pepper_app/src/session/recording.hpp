@@ -7,7 +7,9 @@
 //                    free-form "config" (the effective configuration). Written atomically at start.
 //   frames.jsonl     one JSON object per line and per frame, appended and flushed as frames come:
 //                    {"index": i, "t_ns": t, "file": "frames/000123.png",
-//                     "v_m_s": v, "omega_rad_s": w}   (the command in force when it was taken)
+//                     "v_m_s": v, "omega_rad_s": w,   (the command in force when it was taken)
+//                     "odom": {"x_m": x, "y_m": y, "yaw_rad": a}}   (Frame::odom; absent when
+//                    the frame had none, and in recordings made before it existed)
 //   frames/NNNNNN.png  the grey frames, each written to a temp name and renamed before its index
 //                    line is appended, so every indexed frame is complete.
 // A crash can at worst leave a partial last line in frames.jsonl; the reader skips it and says so.
@@ -40,6 +42,7 @@ struct RecordedFrame {
   std::filesystem::path file;  ///< absolute or relative to the recording folder
   double v_m_s = 0.0;          ///< command in force when the frame was taken (0 when unknown)
   double omega_rad_s = 0.0;
+  std::optional<core::OdometryPose> odom;  ///< the robot's odometry with the frame, if it had one
 };
 
 class RecordingWriter {
@@ -80,7 +83,8 @@ Recording read_recording(const std::filesystem::path& folder,
                          const std::optional<core::CameraIntrinsics>& camera_override,
                          double nominal_fps = 15.0);
 
-/// Loads one recorded frame as 8-bit grey (colour images are converted). Throws RecordingError.
+/// Loads one recorded frame as 8-bit grey (colour images are converted), with its stamp, index
+/// and odometry. Throws RecordingError.
 core::Frame load_frame(const Recording& recording, std::size_t i);
 
 }  // namespace pepper::app

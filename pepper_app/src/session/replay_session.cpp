@@ -266,6 +266,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       s.n_lines = t.n_lines_next;
       s.n_points = t.n_points_next;
       nlohmann::json line = {{"frame", result.frames - 1},
+                             {"odom", odometry_to_json(frame->odom)},
                              {"command", command_to_json(c)},
                              {"telemetry", telemetry_to_json(t)}};
       if (robot.mock) {

@@ -67,6 +67,12 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     link.publish_state({{"drive", {{"v_m_s", 0.0}, {"omega_rad_s", 0.0}}}});
   };
 
+  // The map's distances; declared out here so that the odometry report after the loop covers a
+  // session that ended in a failure too (its map is still saved).
+  core::mapping::DriveOdometer odometer;
+  int64_t frames_with_odometry = 0, frames_without_odometry = 0;
+  std::string odometry_problem;  // the bridge's reason for the last frame without odometry
+
   try {
     link.publish_state({{"mode", "teach"},
                         {"connection", {{"robot", "connecting"}, {"head_locked", false}}}});
@@ -100,12 +106,11 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
 
     nb::BaseVelocity drive{};  // UI drive request
     Clock::time_point drive_at{};
-    nb::BaseVelocity sent{};   // what the base is doing
-    core::mapping::DriveOdometer odometer;
+    nb::BaseVelocity sent{};  // what the base is doing
     bool moving = false;
     auto last_frame_at = Clock::now();
     bool stalled = false;
-    int64_t t0_ns = -1, prev_t_ns = -1;
+    int64_t t0_ns = -1;
     std::optional<Eigen::Vector2d> prev_pos;
     auto next_iter = Clock::now();
 
@@ -173,13 +178,18 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         link.publish_state({{"stop_reason", nullptr}});
       }
       if (t0_ns < 0) t0_ns = frame->t_ns;
-      const double dt_s = prev_t_ns < 0 ? 0.0 : (frame->t_ns - prev_t_ns) * 1e-9;
-      prev_t_ns = frame->t_ns;
 
-      // The map's distances: the commanded speed integrated over every frame (also while not
-      // recording: the base moved), as a robot without odometry access would know it.
-      const double commanded_m = odometer.on_frame(frame->t_ns, sent.v_x_m_s);
-      // Distance: ground truth on the mock robot, else the commanded speed integrated.
+      // The map's distances: the robot's odometry over every frame (also while not recording:
+      // the base moved); where a frame has none, the commanded speed over that interval.
+      const double travelled_m = odometer.on_frame(frame->t_ns, sent.v_x_m_s, frame->odom);
+      if (frame->odom) {
+        ++frames_with_odometry;
+      } else {
+        ++frames_without_odometry;
+        odometry_problem = bridge.odometry_problem();
+      }
+      // Distance shown and limited (max_distance_m): ground truth on the mock robot, else the
+      // map's own measure.
       std::optional<Eigen::Vector2d> pos;
       if (robot.mock) {
         const auto gt = robot.mock->ground_truth();
@@ -190,13 +200,13 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         if (prev_pos) result.distance_m += (*pos - *prev_pos).norm();
         prev_pos = pos;
       } else {
-        result.distance_m += std::abs(sent.v_x_m_s) * dt_s;
+        result.distance_m = travelled_m;
       }
 
       if (recording) {
         if (writer) writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
         ++result.frames_recorded;
-        const core::mapping::TeachStep step = teacher->add_frame(*frame, commanded_m);
+        const core::mapping::TeachStep step = teacher->add_frame(*frame, travelled_m);
         if (pos) result.path_m.push_back(*pos);
         // The first frame is always key image 0 (the teacher does not report it as a new one).
         if (step.new_key_frame || step.frame_number == 0) {
@@ -204,6 +214,12 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           // The selector may pick the previous frame: take the position of the frame it chose.
           if (pos) result.key_m.push_back(result.path_m.at(step.new_key_frame.value_or(0)));
           nlohmann::json key = {{"index", k}, {"distance_m", result.distance_m}, {"weak", false}};
+          if (step.new_key_rule) {
+            key["rule"] = core::mapping::to_string(*step.new_key_rule);
+            if (*step.new_key_rule == core::mapping::KeyImageRule::kHeading) {
+              ++result.heading_key_images;
+            }
+          }
           if (step.frame_number > 0) {  // the first frame has no counts (nothing to match)
             key["n_lines"] = step.n_lines_three_view;
             key["n_points"] = step.n_points_two_view;
@@ -277,6 +293,22 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     result.error = e.what();
   }
 
+  result.distance_from_odometry_m = odometer.from_odometry_m();
+  if (frames_with_odometry == 0 && frames_without_odometry > 0) {
+    result.warnings.push_back("the robot gave no odometry" +
+                              (odometry_problem.empty() ? "" : " (" + odometry_problem + ")") +
+                              ": the map's distances come from the commanded speeds");
+  } else if (frames_without_odometry > 0) {
+    result.warnings.push_back(std::to_string(frames_without_odometry) + " of " +
+                              std::to_string(frames_with_odometry + frames_without_odometry) +
+                              " frames came without odometry (last: " + odometry_problem +
+                              "): their intervals are measured by the commanded speed");
+  }
+  if (odometer.odometry_jumps() > 0) {
+    result.warnings.push_back(std::to_string(odometer.odometry_jumps()) +
+                              " odometry steps faster than the robot can drive were ignored "
+                              "(odometry reset?) and measured by the commanded speed instead");
+  }
   if (teacher) result.frames_seen = teacher->frames_seen();
   // Save what can be saved: the recording is already on disk; now the map.
   if (teacher && teacher->frames_seen() >= 2) {

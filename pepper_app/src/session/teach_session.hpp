@@ -60,6 +60,10 @@ struct TeachResult {
   int key_images = 0;
   bool map_saved = false;
   double distance_m = 0.0;
+  /// Of the map's driven distance, the part the robot's odometry measured (the rest: commanded
+  /// speeds, for frames without odometry).
+  double distance_from_odometry_m = 0.0;
+  int heading_key_images = 0;  ///< key images taken by the heading rule (turns)
   std::vector<std::string> warnings;
   std::vector<Eigen::Vector2d> path_m;  ///< mock only: ground-truth base positions per frame
   std::vector<Eigen::Vector2d> key_m;   ///< mock only: base positions of the key images

@@ -76,6 +76,11 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
   };
 }
 
+nlohmann::json odometry_to_json(const std::optional<core::OdometryPose>& odom) {
+  if (!odom) return nullptr;
+  return {{"x_m", num(odom->x_m)}, {"y_m", num(odom->y_m)}, {"yaw_rad", num(odom->yaw_rad)}};
+}
+
 nlohmann::json overlay_to_json(const core::features::FeatureOverlay& o, const std::string& what) {
   nlohmann::json segments = nlohmann::json::array();
   for (const auto& s : o.lines) {

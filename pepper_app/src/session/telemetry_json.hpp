@@ -4,18 +4,21 @@
 // The feature overlay is not part of telemetry_to_json (per-frame logs stay small); the teach UI
 // gets it from overlay_to_json in its frame header format (docs/teach_ui.md "Frame").
 
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "core/features/feature_overlay.hpp"
-
 #include "core/navigator/navigator.hpp"
 
 namespace pepper::app {
 
 nlohmann::json command_to_json(const core::navigator::Command& command);
 nlohmann::json telemetry_to_json(const core::navigator::Telemetry& telemetry);
+
+/// The robot's odometry read with a frame: {"x_m", "y_m", "yaw_rad"}, or null when the frame had
+/// none. Telemetry lines carry it next to the navigator's telemetry as "odom".
+nlohmann::json odometry_to_json(const std::optional<core::OdometryPose>& odom);
 
 /// {"lines":[{label, color, width_px, segments:[[u0,v0,u1,v1],...]}],
 ///  "points":[{label, color, radius_px, uv:[[u,v],...]}]} with pixels rounded to integers;

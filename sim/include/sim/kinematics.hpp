@@ -41,6 +41,14 @@ struct KinematicsOptions {
   std::vector<std::string> validate() const;
 };
 
+/// One integration step the base took (not blocked): for the odometry models.
+struct BaseStep {
+  Pose2D before;                  ///< pose at the start of the step
+  Pose2D after;                   ///< pose at its end (actual motion, actuator noise included)
+  core::BaseVelocity controlled;  ///< the motion controller's velocity, without actuator noise
+  double dt_s = 0.0;
+};
+
 /// Exact pose after moving with constant robot-frame velocity for dt_s (an arc, or a line when
 /// omega is ~0). Yaw is wrapped to (-pi, pi].
 Pose2D integrate_constant(const Pose2D& start, const core::BaseVelocity& velocity, double dt_s);
@@ -59,8 +67,10 @@ class BaseKinematics {
   /// Advances the clock to t_end_ns. `blocked(pose, t_ns)` is asked after every step; when it
   /// returns true the base goes back to the pose before that step, stops (velocity zero) and
   /// the function returns false. Returns true when the interval was completed freely.
+  /// `on_step`, when given, is told of every step taken (after `blocked` let it through).
   bool advance_to(int64_t t_end_ns,
-                  const std::function<bool(const Pose2D&, int64_t)>& blocked = nullptr);
+                  const std::function<bool(const Pose2D&, int64_t)>& blocked = nullptr,
+                  const std::function<void(const BaseStep&)>& on_step = nullptr);
 
   /// Stops at once (after a collision): velocity and pending commands cleared.
   void halt();

@@ -12,6 +12,11 @@
 // through the neck, HeadPitch (> 0 looks down) about the neck's left axis; both pivot at the same
 // point (the URDF's 2 cm between them is neglected). Hip and knee joints are stored but do not
 // move the camera.
+// Odometry (odometry()): both estimates start at (0, 0, 0) where the robot is created and follow
+// every integration step: the wheel odometry from the actual motion with drift
+// (sim/wheel_odometry.hpp), the command estimate from the controller's velocity without actuator
+// noise. place() moves the base without them (a robot carried elsewhere), so after a place()
+// they no longer describe the world pose at all: only their differences along one drive do.
 // Collision: after each integration step the base footprint (a disc of robot_radius_m) is tested
 // against walls, furniture and people; on contact the base stops where it was, collided() turns
 // true and further velocity commands are logged but ignored until place() (the run is over).
@@ -27,6 +32,7 @@
 #include "sim/kinematics.hpp"
 #include "sim/renderer.hpp"
 #include "sim/sim_robot.hpp"
+#include "sim/wheel_odometry.hpp"
 #include "sim/world.hpp"
 
 namespace pepper::sim {
@@ -47,6 +53,7 @@ struct MockRobotOptions {
   core::CameraIntrinsics intrinsics_vga = core::CameraIntrinsics::pepper_top_vga();
   CameraMount mount;
   KinematicsOptions kinematics;
+  WheelOdometryOptions odometry;  ///< the drift of getRobotPosition(true)
   RenderOptions render;
 
   std::vector<std::string> validate() const;
@@ -83,6 +90,7 @@ class MockRobot final : public SimRobot {
   void set_joint_angles(const std::vector<std::string>& names,
                         const std::vector<double>& angles_rad) override;
   std::vector<double> joint_angles(const std::vector<std::string>& names) const override;
+  core::OdometryPose odometry(OdometrySource source) const override;
   int64_t now_ns() const override;
   std::vector<CommandRecord> command_log() const override;
 
@@ -110,6 +118,8 @@ class MockRobot final : public SimRobot {
   MockRobotOptions options_;
   mutable std::mutex mutex_;
   BaseKinematics base_;
+  WheelOdometry wheel_odometry_;  ///< getRobotPosition(true)
+  Pose2D command_odometry_;       ///< getRobotPosition(false), in the odometry frame
   Renderer renderer_;
   LightingCondition light_;
   double head_yaw_rad_ = 0.0;

@@ -26,6 +26,7 @@
 #include "core/base_velocity.hpp"
 #include "core/camera/intrinsics.hpp"
 #include "core/frame.hpp"
+#include "core/odometry.hpp"
 
 namespace pepper::sim {
 
@@ -33,6 +34,12 @@ namespace pepper::sim {
 class SimError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// Which pose estimate ALMotion.getRobotPosition(useSensors) returns.
+enum class OdometrySource {
+  kWheels,    ///< useSensors = true: the wheel odometry, integrated from the actual motion, drifts
+  kCommands,  ///< useSensors = false: the commanded velocities integrated (what ALMotion asked)
 };
 
 /// One velocity command as received by the simulated base, for tests and evaluation.
@@ -64,6 +71,12 @@ class SimRobot {
   virtual void set_joint_angles(const std::vector<std::string>& names,
                                 const std::vector<double>& angles_rad) = 0;
   virtual std::vector<double> joint_angles(const std::vector<std::string>& names) const = 0;
+
+  /// ALMotion.getRobotPosition: the base's pose in the odometry frame (T_odom_base,
+  /// core/odometry.hpp), at the simulated time now (a capture() just before gives the odometry
+  /// of that frame). Never the ground truth: the odometry frame is where the robot was created,
+  /// and the wheel estimate drifts (sim/wheel_odometry.hpp).
+  virtual core::OdometryPose odometry(OdometrySource source) const = 0;
 
   /// Simulated time now, ns.
   virtual int64_t now_ns() const = 0;

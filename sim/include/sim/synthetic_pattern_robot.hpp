@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "sim/sim_robot.hpp"
+#include "sim/wheel_odometry.hpp"
 
 namespace pepper::sim {
 
@@ -48,6 +49,9 @@ class SyntheticPatternRobot : public SimRobot {
   void set_joint_angles(const std::vector<std::string>& names,
                         const std::vector<double>& angles_rad) override;
   std::vector<double> joint_angles(const std::vector<std::string>& names) const override;
+  /// kCommands: the pose integrated so far (this base does exactly what it is told); kWheels: the
+  /// same motion through WheelOdometry (drifts). As of the last capture() or command.
+  core::OdometryPose odometry(OdometrySource source) const override;
   int64_t now_ns() const override;
   std::vector<CommandRecord> command_log() const override;
 
@@ -74,6 +78,7 @@ class SyntheticPatternRobot : public SimRobot {
   int64_t integrated_t_ns_ = 0;  ///< time up to which the pose is integrated
   int64_t next_index_ = 0;
   Pose2 pose_;
+  WheelOdometry wheel_odometry_;
   core::BaseVelocity velocity_;
   std::map<std::string, double> joints_rad_;
   std::vector<CommandRecord> log_;

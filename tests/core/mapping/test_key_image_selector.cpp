@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "core/mapping/key_image_selector.hpp"
@@ -26,6 +27,37 @@ TEST(KeyImageSelector, ScriptedCounts) {
   EXPECT_EQ(*s.finish(), 7);  // last frame stored
   EXPECT_EQ(s.key_images(), (std::vector<int64_t>{0, 2, 4, 5, 7}));
   EXPECT_THROW(s.on_frame(8, 50), std::invalid_argument);
+}
+
+// The heading rule (issue 29): a turn gets key images inside it even where the counts stay high
+// (a corner facing a blank wall keeps the few features it has); the count rule is untouched.
+TEST(KeyImageSelector, HeadingChangeTakesTheFrameBefore) {
+  KeyImageSelectorOptions o;
+  o.epsilon = 10;
+  o.min_frame_gap = 2;
+  o.relative = 0.0;
+  o.max_heading_change_rad = 0.35;
+  KeyImageSelector s(o);
+  EXPECT_FALSE(s.on_frame(1, 50, 0.1));
+  EXPECT_FALSE(s.on_frame(2, 50, 0.35));  // equal to the bound: not above
+  EXPECT_EQ(*s.on_frame(3, 50, 0.4), 2);  // above: Ic-1 = 2, the last frame within the bound
+  EXPECT_EQ(s.last_rule(), KeyImageRule::kHeading);
+  EXPECT_FALSE(s.on_frame(4, 50, 0.5));  // candidate 3: gap 1 < 2, even though it turned
+  EXPECT_EQ(*s.on_frame(5, 50, 0.6), 4);
+  EXPECT_FALSE(s.on_frame(6, 50));  // no odometry: only the count rule
+  EXPECT_EQ(*s.on_frame(7, 5), 6);
+  EXPECT_EQ(s.last_rule(), KeyImageRule::kFeatures);
+  EXPECT_EQ(*s.finish(), 7);
+  EXPECT_EQ(s.last_rule(), KeyImageRule::kLast);
+
+  o.max_heading_change_rad = 0.0;  // off
+  KeyImageSelector off(o);
+  EXPECT_FALSE(off.on_frame(1, 50, 3.0));
+  EXPECT_FALSE(off.on_frame(2, 50, 3.0));
+  EXPECT_FALSE(off.on_frame(3, 50, 3.0));
+  o.max_heading_change_rad = -0.1;
+  ASSERT_EQ(o.validate().size(), 1u);
+  EXPECT_NE(o.validate()[0].find("max_heading_change_rad"), std::string::npos);
 }
 
 TEST(KeyImageSelector, MinFrameGap) {

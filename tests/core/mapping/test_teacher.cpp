@@ -94,6 +94,76 @@ TEST(Teacher, KeyImagesDenserInTheTurn) {
   }
 }
 
+/// The shared tour's frames with odometry: the path's poses seen from an odometry frame that is
+/// not the world (rotated and shifted, as a robot's is), plus a heading that reads 3 % long.
+std::vector<Frame> frames_with_odometry(const test::SharedTour& tour) {
+  std::vector<Frame> frames = tour.frames;
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const test::Pose2d& p = tour.path[i];
+    frames[i].odom = OdometryPose{10.0 + c * p.x_m - s * p.y_m, -4.0 + s * p.x_m + c * p.y_m,
+                                  0.7 + 1.03 * p.yaw_rad};
+  }
+  return frames;
+}
+
+// Issue 29: with the robot's odometry, the 60-degree turn of the shared tour gets key images
+// inside it from the heading rule alone (the count rule is made unable to fire), no two
+// successive key images more than the bound (plus one frame's turn) apart in heading; each key
+// image keeps its own frame's odometry.
+TEST(Teacher, HeadingRuleTakesKeyImagesInsideATurn) {
+  const auto& tour = shared_tour();
+  const std::vector<Frame> frames = frames_with_odometry(tour);
+  TeachOptions options = tour.teach_options;
+  options.selector.epsilon = 1;  // a count below 1 never happens in this textured room
+  options.selector.max_heading_change_rad = 0.35;
+  Teacher teacher(tour.camera, options);
+  int heading_keys = 0;
+  for (const Frame& f : frames) {
+    const TeachStep step = teacher.add_frame(f);
+    if (step.new_key_rule) {
+      ASSERT_EQ(*step.new_key_rule, KeyImageRule::kHeading) << "frame " << step.frame_number;
+      ++heading_keys;
+    }
+    if (step.frame_number > 0) {
+      ASSERT_TRUE(step.heading_change_rad.has_value());
+    }
+  }
+  const memory::VisualMemory map = teacher.finish();
+  // 60 degrees x 1.03 = 1.08 rad read: above 0.35 three times.
+  EXPECT_EQ(heading_keys, 3);
+  ASSERT_EQ(map.key_images.size(), 5u);          // first, three in the turn, last
+  constexpr int kTurnBegin = 56, kTurnEnd = 75;  // frames of the arc (see KeyImagesDenserInTheTurn)
+  // One frame turns 4.5 cm / 0.8 m = 0.056 rad (x 1.03 as read).
+  const double max_step_rad = 0.35 + 1.03 * 0.045 / 0.8 + 1e-9;
+  for (size_t k = 0; k < map.key_images.size(); ++k) {
+    const memory::KeyImage& key = map.key_images[k];
+    const Frame& own = frames[static_cast<size_t>(key.source_frame_index)];
+    ASSERT_TRUE(key.odom.has_value());
+    EXPECT_EQ(key.odom->x_m, own.odom->x_m);
+    EXPECT_EQ(key.odom->yaw_rad, own.odom->yaw_rad);
+    if (k > 0 && k + 1 < map.key_images.size()) {
+      EXPECT_GE(key.source_frame_index, kTurnBegin);
+      EXPECT_LT(key.source_frame_index, kTurnEnd);
+    }
+    if (k > 0) {
+      EXPECT_LE(key.odom->yaw_rad - map.key_images[k - 1].odom->yaw_rad, max_step_rad);
+    }
+  }
+  // Without odometry the heading rule does nothing: fewer key images, none of them by heading.
+  Teacher blind(tour.camera, options);
+  for (const Frame& f : tour.frames) {
+    const TeachStep step = blind.add_frame(f);
+    EXPECT_FALSE(step.heading_change_rad.has_value());
+    if (step.new_key_rule) {
+      EXPECT_NE(*step.new_key_rule, KeyImageRule::kHeading);
+    }
+  }
+  const memory::VisualMemory blind_map = blind.finish();
+  EXPECT_LT(blind_map.key_images.size(), map.key_images.size());
+  EXPECT_FALSE(blind_map.key_images[0].odom.has_value());
+}
+
 TEST(Teacher, BadInputs) {
   const auto& tour = shared_tour();
   Teacher t(tour.camera);
@@ -103,6 +173,9 @@ TEST(Teacher, BadInputs) {
   other.gray = cv::Mat(120, 160, CV_8UC1, cv::Scalar(0));
   EXPECT_THROW(t.add_frame(other), std::invalid_argument);
   EXPECT_THROW(t.finish(), std::invalid_argument);  // one frame only
+  Frame nan_odometry = tour.frames[1];
+  nan_odometry.odom = OdometryPose{0.0, std::nan(""), 0.0};
+  EXPECT_THROW(t.add_frame(nan_odometry), std::invalid_argument);
   TeachOptions bad;
   bad.selector.epsilon = 0;
   EXPECT_THROW(Teacher(tour.camera, bad), std::invalid_argument);

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <random>
@@ -325,6 +326,54 @@ TEST_F(VisualMemoryTest, TravelledDistanceRoundTripsOrIsUnknown) {
   expect_error(MapError::Kind::kMalformed, "manifest.json");
   write_patched(manifest);  // the patching itself is sound
   EXPECT_EQ(load_map(dir_).key_images[2].travelled_m, 0.9);
+}
+
+// Each key image's odometry (issues 23, 29) round-trips exactly; a manifest without the field,
+// as every map saved before it existed, loads with none; one key image may lack it (a frame whose
+// reading failed); non-finite numbers are refused.
+TEST_F(VisualMemoryTest, OdometryRoundTripsAndOldMapsLoadWithout) {
+  VisualMemory with = synthetic_map(3);
+  with.key_images[0].odom = OdometryPose{0.0, 0.0, 0.0};
+  with.key_images[1].odom = OdometryPose{1.234567890123, -0.5, 3.0};
+  // key image 2: none (its frame came without odometry)
+  save_map(with, dir_);
+  const VisualMemory back = load_map(dir_);
+  ASSERT_TRUE(back.key_images[1].odom.has_value());
+  EXPECT_EQ(back.key_images[1].odom->x_m, 1.234567890123);
+  EXPECT_EQ(back.key_images[1].odom->y_m, -0.5);
+  EXPECT_EQ(back.key_images[1].odom->yaw_rad, 3.0);
+  ASSERT_TRUE(back.key_images[0].odom.has_value());
+  EXPECT_FALSE(back.key_images[2].odom.has_value());
+  EXPECT_EQ(read_map_info(dir_).key_images[1].odom->yaw_rad, 3.0);
+
+  const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
+  auto write_patched = [&](nlohmann::json j) {
+    j.erase("manifest_crc32");
+    const std::string canon = j.dump();
+    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
+    const std::string text = j.dump(2);
+    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
+  };
+  auto old = manifest;  // a map from before the field: no "odom" anywhere
+  for (auto& k : old["key_images"]) k.erase("odom");
+  write_patched(old);
+  const VisualMemory old_map = load_map(dir_);
+  for (const KeyImage& k : old_map.key_images) EXPECT_FALSE(k.odom.has_value());
+  EXPECT_EQ(old_map.key_images.size(), 3u);
+
+  auto not_finite = manifest;
+  not_finite["key_images"][1]["odom"]["y_m"] = "NaN";
+  write_patched(not_finite);
+  expect_error(MapError::Kind::kMalformed, "manifest.json");
+  auto incomplete = manifest;
+  incomplete["key_images"][1]["odom"].erase("yaw_rad");
+  write_patched(incomplete);
+  expect_error(MapError::Kind::kMalformed, "manifest.json");
+
+  VisualMemory bad = synthetic_map(2);
+  bad.key_images[1].odom = OdometryPose{0.0, std::numeric_limits<double>::infinity(), 0.0};
+  EXPECT_THROW(save_map(bad, root_ / "bad_odom"), MapError);
+  EXPECT_FALSE(fs::exists(root_ / "bad_odom"));
 }
 
 TEST_F(VisualMemoryTest, InvalidMapsAreRefused) {

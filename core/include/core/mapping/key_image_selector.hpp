@@ -13,6 +13,12 @@
 // tour is never left without a reference. finish(last) marks the last frame as the final key
 // image (unless it already is the key image).
 //
+// Heading rule (not in the paper, issue 29): when the caller also gives the heading change of
+// frame c since the key image (from the robot's odometry) and it exceeds max_heading_change_rad,
+// frame c-1 becomes the key image as well (same gap rule), so that a turn is never covered by one
+// key image at each end only: in a turn towards a blank wall the counts may stay high on a few
+// close features, or fall too late, while the view itself has swung away.
+//
 // threshold = epsilon (the paper), or with `relative` > 0
 // min(max(epsilon, relative * ref_k), max_fraction * ref_k) with ref_k the count at frame k + 2
 // of the current key image k: see the options and docs/method/teach.md.
@@ -50,8 +56,25 @@ struct KeyImageSelectorOptions {
   /// worlds/window_corridor.yaml, 20 key images 5 cm apart in the last 1.3 m, more than replay
   /// could switch through (docs/method/teach.md). In (relative, 1]; 1 = no cap.
   double max_fraction = 0.7;
+  /// Heading rule (not in the paper; 0 = off): a key image is also taken when the robot's
+  /// odometry heading has changed by more than this since the current key image. Default 0.35
+  /// rad (20 degrees), a third of the top camera's horizontal field of view (56 degrees:
+  /// 2 atan(160 / 298) at QVGA), so that successive key images of a turn still share about two
+  /// thirds of their view even where the feature counts do not fall (a corner facing a blank
+  /// wall); a 90-degree turn gets at least four key images. Needs frames with odometry; without
+  /// it only the count rule applies.
+  double max_heading_change_rad = 0.35;
   std::vector<std::string> validate() const;
 };
+
+/// Which rule took a key image.
+enum class KeyImageRule {
+  kFirst,     ///< frame 0
+  kFeatures,  ///< the verified count fell below the threshold (the paper's rule)
+  kHeading,   ///< the odometry heading changed by more than max_heading_change_rad
+  kLast,      ///< the end of the tour (finish())
+};
+const char* to_string(KeyImageRule rule);
 
 class KeyImageSelector {
  public:
@@ -59,9 +82,11 @@ class KeyImageSelector {
 
   /// The current key image's frame number (frame 0 after construction).
   int64_t key() const { return key_; }
-  /// Frame c (must be previous + 1, starting at 1) with its count against key(). Returns the
-  /// frame number of a new key image when one is taken.
-  std::optional<int64_t> on_frame(int64_t c, int count);
+  /// Frame c (must be previous + 1, starting at 1) with its count against key() and, when the
+  /// robot's odometry is known for both, |heading(c) - heading(key())| wrapped to [0, pi].
+  /// Returns the frame number of a new key image when one is taken (last_rule() says why).
+  std::optional<int64_t> on_frame(int64_t c, int count,
+                                  std::optional<double> heading_change_rad = std::nullopt);
   /// End of the sequence at frame `last` (the last frame passed to on_frame, or 0). Returns the
   /// final key image's frame number when it is new.
   std::optional<int64_t> finish();
@@ -73,6 +98,9 @@ class KeyImageSelector {
   /// Threshold and reference that the last on_frame compared its count with.
   double last_threshold() const { return last_threshold_; }
   int last_reference() const { return last_reference_; }
+
+  /// The rule that took the latest key image.
+  KeyImageRule last_rule() const { return last_rule_; }
 
   /// All key image frame numbers so far, increasing.
   const std::vector<int64_t>& key_images() const { return keys_; }
@@ -86,6 +114,7 @@ class KeyImageSelector {
   double threshold_ = 0.0;
   double last_threshold_ = 0.0;
   int last_reference_ = -1;
+  KeyImageRule last_rule_ = KeyImageRule::kFirst;
   std::vector<int64_t> keys_{0};
 };
 

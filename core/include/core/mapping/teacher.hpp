@@ -11,7 +11,9 @@
 // Inputs: Frame::gray CV_8UC1 of constant size; Frame::index is stored as the key image's source
 // frame index (the teach frame number when index < 0); t_ns as its stamp; travelled_m (the
 // distance driven since the first frame, drive_odometer.hpp; NaN when unknown, then on every
-// frame) as its KeyImage::travelled_m.
+// frame) as its KeyImage::travelled_m; Frame::odom (the robot's odometry, may be missing on any
+// frame) as its KeyImage::odom, and for the selector's heading rule: the heading change of Ic
+// since Ik when both have odometry.
 // Memory: keeps the features of the current key image and of the previous frame, plus the key
 // images themselves. Not thread-safe. Bad frames (empty, wrong type, size change) and
 // finish() with fewer than 2 frames throw std::invalid_argument; invalid options throw at
@@ -48,6 +50,9 @@ struct TeachStep {
   double threshold = 0.0;                ///< the selector's threshold for this frame
   int reference_count = -1;              ///< relative rule: the key image's reference count
   std::optional<int64_t> new_key_frame;  ///< frame number of a key image taken at this step
+  std::optional<KeyImageRule> new_key_rule;  ///< and the rule that took it
+  /// |heading(Ic) - heading(Ik)| from the odometry, rad; nullopt without odometry on both.
+  std::optional<double> heading_change_rad;
   int key_image_count = 0;               ///< key images so far
 };
 
@@ -74,6 +79,7 @@ class Teacher {
     int64_t source_frame_index = -1;
     int64_t t_ns = 0;
     double travelled_m = std::numeric_limits<double>::quiet_NaN();
+    std::optional<OdometryPose> odom;
     int64_t frame_number = 0;
   };
   void store_key(const Stored& s);

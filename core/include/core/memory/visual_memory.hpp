@@ -7,9 +7,9 @@
 //
 // On disk, a map is a folder (docs/method/map_format.md):
 //   manifest.json          format name + version, camera intrinsics, parameters, key images in
-//                          order (source frame index, t_ns, optional travelled_m, file names,
-//                          byte sizes, CRC-32s, feature counts), final image index, and the
-//                          manifest's own CRC-32
+//                          order (source frame index, t_ns, optional travelled_m and odom,
+//                          file names, byte sizes, CRC-32s, feature counts), final image
+//                          index, and the manifest's own CRC-32
 //   key_NNNN.png           the key image, 8-bit grey PNG
 //   key_NNNN.feat          its features, little binary format with a version and a trailing
 //                          CRC-32 (lines + LBD descriptors, corners, ORB keypoints + descriptors)
@@ -45,8 +45,9 @@ inline constexpr int kFeatureFileVersion = 1;
 struct KeyImage {
   int64_t source_frame_index = -1;   ///< index of the frame in the teach sequence
   int64_t t_ns = 0;                  ///< its capture stamp
-  /// Distance the base drove from the tour's first frame to this image, m, from the speeds
-  /// commanded during teach (mapping/drive_odometer.hpp); NaN when unknown (a map taught from
+  /// Distance the base drove from the tour's first frame to this image, m, from the robot's
+  /// odometry, or the speeds commanded during teach where frames had none
+  /// (mapping/drive_odometer.hpp); NaN when unknown (a map taught from
   /// plain images, or saved before the field existed). Never decreases along the tour.
   double travelled_m = std::numeric_limits<double>::quiet_NaN();
   /// The robot's odometry when the image was taken (core/odometry.hpp, teach's odometry frame);
@@ -114,6 +115,7 @@ struct MapSummary {
     int corners = 0;
     int keypoints = 0;
     double travelled_m = std::numeric_limits<double>::quiet_NaN();  ///< KeyImage::travelled_m
+    std::optional<OdometryPose> odom;                               ///< KeyImage::odom
   };
   std::vector<PerKeyImage> key_images;
 

@@ -6,7 +6,8 @@
 // 1: service, services, machineId) and ALMotion, ALVideoDevice, ALRobotPosture, ALAutonomousLife,
 // ALBasicAwareness with NAOqi's method names, signatures and uids (PROTOCOL.md section 7), each
 // with its MetaObject. Backing: getImageRemote renders SimRobot::capture() at the subscribed
-// resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints.
+// resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints;
+// getRobotPosition(useSensors) -> SimRobot::odometry (true: wheels, false: commands).
 // When a connection that commanded the base drops, the server stops the base (stop_move), so a
 // lost client never leaves the simulated robot driving. Errors follow libqi's texts (3.2); a
 // request the SimRobot refuses (sim::SimError) becomes an Error reply carrying its text.

@@ -11,6 +11,12 @@
 // Frames: one getImageRemote request is always kept in flight while the caller processes the
 // previous frame (hides WiFi latency); frames carry the robot's timestamp (s, us -> t_ns); a
 // reply with a timestamp not newer than the last one (the robot had no new image) is skipped.
+// Odometry: with each image request, ALMotion.getRobotPosition(true) is sent just before it
+// (asynchronously, so it adds no round trip: its small reply is normally back before the image's)
+// and its [x, y, theta] becomes the frame's Frame::odom. When the reply is not there
+// `odometry_grace` after the image, is an Error, or is not three finite numbers, or the robot has
+// no getRobotPosition(b), the frame comes without odometry: counted, the reason kept in
+// odometry_problem(), never fatal.
 //
 // Safety (docs/naoqi_bridge.md): a watchdog thread stops the base (move(0,0,0) then stopMove)
 // when no fresh move() arrives within `watchdog_timeout` while moving, when frames stall while
@@ -59,6 +65,10 @@ struct QiBridgeOptions {
   double head_max_speed_fraction = 0.2;  ///< setAngles fractionMaxSpeed, (0, 1]
   std::chrono::milliseconds head_settle_timeout{2000};  ///< lock_head(): wait for read-back
   std::chrono::milliseconds head_resend_period{1000};   ///< re-send head angles; 0 = off
+  bool read_odometry = true;  ///< ALMotion.getRobotPosition(true) with each frame (Frame::odom)
+  /// How long a frame waits for its odometry reply after the image arrived (normally 0: the
+  /// reply is already there); beyond it the frame goes on without odometry.
+  std::chrono::milliseconds odometry_grace{5};
   CodecLimits limits;
 
   /// Messages naming each invalid field and its allowed range; empty when valid.
@@ -89,6 +99,9 @@ class QiBridge : public RobotBridge {
   /// re-lock the head if they were active. The fault stays latched (clear_fault() re-arms).
   void reconnect();
 
+  /// Why the last frame came without odometry ("" when it had it, or before the first frame).
+  std::string odometry_problem() const override;
+
   /// SHA-256 of the robot's TLS certificate (tcps), "" on tcp.
   std::string tls_fingerprint() const;
   QiSession& session() { return *session_; }
@@ -99,6 +112,7 @@ class QiBridge : public RobotBridge {
     std::uint64_t moves = 0;           ///< move commands sent
     std::uint64_t stops = 0;           ///< stop sequences sent
     std::uint64_t watchdog_stops = 0;  ///< of which triggered by the watchdog
+    std::uint64_t frames_without_odometry = 0;  ///< frames returned with Frame::odom empty
   };
   Counters counters() const;
   /// Why the last automatic stop happened ("watchdog: ...", "frames stalled ..."), for logs.
@@ -108,6 +122,11 @@ class QiBridge : public RobotBridge {
   void open_session();
   void subscribe_camera_locked();
   PendingCall request_image();
+  /// Sends getRobotPosition(true) and getImageRemote, in that order, as the call in flight.
+  void request_frame_locked();
+  /// The odometry of a frame from its getRobotPosition call; nullopt (and the reason kept) when
+  /// there is none.
+  std::optional<core::OdometryPose> take_odometry(PendingCall& call);
   void latch_fault(const std::string& why);
   void stop_base(const std::string& why) noexcept;
   void watchdog_loop();
@@ -123,6 +142,9 @@ class QiBridge : public RobotBridge {
   int resolution_code_ = 2;
   std::string camera_handle_;
   PendingCall inflight_;
+  PendingCall odometry_inflight_;    ///< getRobotPosition sent with inflight_ (invalid when none)
+  bool odometry_available_ = false;  ///< read_odometry and the robot has getRobotPosition(b)
+  std::string odometry_problem_;
   std::chrono::steady_clock::time_point inflight_since_{};
   std::int64_t last_t_ns_ = -1;
   std::int64_t frame_index_ = 0;
