@@ -79,21 +79,25 @@ TEST_F(VispSequenceData, ConsecutiveFramesVerifyOverThreeViews) {
 }
 
 // The light halved between a key image and the current one. On locally normalised grey levels
-// (klt.normalise_window_px, the default) KLT keeps its points, so the ORB fallback has nothing
-// to do. On raw grey levels KLT's patch error rejects most tracks and ORB (intensity comparisons
-// within a patch) keeps matching: the fallback's mechanism is checked there. With
+// (klt.normalise_window_px = 61) KLT keeps its points, so the ORB fallback has nothing to do. On
+// raw grey levels (the default) KLT's patch error rejects most tracks and ORB (intensity
+// comparisons within a patch) keeps matching: the fallback's mechanism is checked there. With
 // orb_fallback_below_points above KLT's count and at most ORB's, FrameMatcher::
 // two_view_for_control returns the ORB points (flagged: their idx_a are keypoints) and
 // two_view() still KLT's; above ORB's count too (too few either way), KLT's; below KLT's, KLT's.
 // Measured (frames 0 and 1 of mbt/cube, frame 1 x0.5): raw KLT 0 points, ORB 165; normalised
 // KLT 182 (of 190 in the same light).
 TEST_F(VispSequenceData, NormalisedKltKeepsPointsWhenTheLightHalves) {
-  const FeatureExtractor ex(cube_camera());
+  FeatureExtractorOptions normalised_ex;
+  normalised_ex.klt.normalise_window_px = 61;
+  MatcherOptions normalised;
+  normalised.klt.normalise_window_px = 61;
+  const FeatureExtractor ex(cube_camera(), normalised_ex);
   const ImageFeatures key = load(ex, cube_frame(0));
   cv::Mat dim;
   to_gray(cv::imread(cube_frame(1), cv::IMREAD_UNCHANGED)).convertTo(dim, CV_8U, 0.5);
-  const TwoViewMatches dimmed = match_two_view(key, ex.extract(dim));
-  const TwoViewMatches same = match_two_view(key, load(ex, cube_frame(1)));
+  const TwoViewMatches dimmed = match_two_view(key, ex.extract(dim), normalised);
+  const TwoViewMatches same = match_two_view(key, load(ex, cube_frame(1)), normalised);
   EXPECT_GE(dimmed.n_points(), 0.8 * same.n_points());
   MatcherOptions raw;
   raw.klt.normalise_window_px = 0;
