@@ -822,6 +822,10 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       Impl* const self = this;
       if (ec) {
         if (ec == asio::error::operation_aborted || !self->acceptor->is_open()) return;
+        if (ec == asio::error::connection_aborted) {  // reset while queued: next one at once
+          self->accept_next();
+          return;
+        }
         // Out of descriptors (EMFILE) or similar: try again a little later instead of spinning.
         auto retry = std::make_shared<asio::steady_timer>(io, std::chrono::milliseconds(100));
         retry->async_wait([self, retry](const boost::system::error_code& e) {

@@ -579,7 +579,9 @@ TEST(QiLoopback, EachMoveEndsByItselfOnTheRobotAfterTheHorizon) {
   qi::MockNaoqiServer server(robot);
   server.start();
   auto o = bridge_options(server);
-  o.deadman_horizon = 200ms;
+  // A horizon well above the 50 ms command period, so a loaded machine's late wake-ups do not
+  // open gaps; the app's own default is 250 ms at 66 ms per frame.
+  o.deadman_horizon = 500ms;
   o.watchdog_timeout = 5000ms;  // keep the laptop-side watchdog out of the way
   qi::QiBridge bridge(o);
   bridge.connect();
@@ -602,13 +604,14 @@ TEST(QiLoopback, EachMoveEndsByItselfOnTheRobotAfterTheHorizon) {
   EXPECT_EQ(server.stats().bounded_moves_ended, 0u);
   for (const auto& r : robot.command_log()) EXPECT_FALSE(r.stop_move);
 
-  // Then silence: the robot stops by itself at the horizon, and says so.
+  // Then silence after one last command: the robot stops by itself at the horizon.
+  bridge.move({0.15, 0.0, 0.3});
   const auto last = std::chrono::steady_clock::now();
   ASSERT_TRUE(wait_until([&] { return velocity_is_zero(robot_velocity(observer, motion)); },
-                         2000ms));
+                         3000ms));
   const auto stopped_after = std::chrono::steady_clock::now() - last;
-  EXPECT_GE(stopped_after, 150ms);  // not before the horizon (minus the last sleep's slack)
-  EXPECT_LT(stopped_after, 1000ms);
+  EXPECT_GE(stopped_after, 480ms);  // not before the horizon (it starts when the robot gets it)
+  EXPECT_LT(stopped_after, 2000ms);
   EXPECT_EQ(server.stats().bounded_moves_ended, 1u);
   EXPECT_TRUE(robot.command_log().back().stop_move);
   EXPECT_FALSE(observer.call(motion, "moveIsActive", "()", {}).as_bool());
@@ -670,7 +673,7 @@ TEST(QiLoopback, NonFiniteVelocitiesAreRefusedByTheRobot) {
 
 TEST(QiLoopback, CallLogHasOneJsonLinePerCallAndNeverTheToken) {
   SyntheticPatternRobot robot;
-  const std::string log = ::testing::TempDir() + "/qi_call_log.jsonl";
+  const std::string log = ::testing::TempDir() + "/qi_call_log_" + std::to_string(getpid()) + ".jsonl";
   std::remove(log.c_str());
   qi::MockServerOptions so;
   so.user = "nao";
@@ -763,7 +766,8 @@ TEST(QiLoopback, ManyConnectionsAndSlowClientsNeitherGrowMemoryNorStarveAGoodCli
   std::cout << "[measured] RSS growth over 10000 connect/close cycles: "
             << (static_cast<double>(after) - static_cast<double>(before)) / 1e6 << " MB\n";
   EXPECT_LT(static_cast<double>(after) - static_cast<double>(before), 5e6);
-  EXPECT_GE(server.stats().connections_accepted, 10500u);
+  // Connections reset before accept() took them are never accepted: at least the graceful half.
+  EXPECT_GE(server.stats().connections_accepted, 5250u);
 
   // 50 slow clients: half a header each, then nothing.
   std::vector<tcp::socket> slow;
