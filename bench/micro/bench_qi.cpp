@@ -7,6 +7,7 @@
 // The served robot returns one precomputed frame (no rendering) so the figures measure the
 // protocol path: server encode + loopback TCP/TLS + client decode.
 // BM_WatchdogStopLatency: how long after the app's last move() the robot receives the stop.
+// BM_DeadmanStopLatency: how long after the app's last move() the robot stops by itself.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -160,6 +161,7 @@ void BM_WatchdogStopLatency(benchmark::State& state) {
   qi::QiBridgeOptions o;
   o.url = fx.server.url();
   o.head_resend_period = std::chrono::milliseconds(0);
+  o.deadman_horizon = std::chrono::milliseconds(0);  // plain move: only the watchdog stops it
   qi::QiBridge bridge(o);
   bridge.connect();
   std::vector<double> ms;
@@ -181,6 +183,53 @@ void BM_WatchdogStopLatency(benchmark::State& state) {
       }
       if (elapsed > std::chrono::seconds(5)) {
         state.SkipWithError("no stop within 5 s");
+        return;
+      }
+    }
+    ms.push_back(latency_ms);
+    state.SetIterationTime(latency_ms / 1000.0);
+  }
+  std::sort(ms.begin(), ms.end());
+  if (!ms.empty()) {
+    state.counters["p50_ms"] = ms[ms.size() / 2];
+    state.counters["p99_ms"] = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
+    state.counters["max_ms"] = ms.back();
+  }
+}
+
+/// Robot-side deadman (issue 23): time from the app's last move() until the robot stops the base
+/// by itself (the moveTo's horizon ends, default 250 ms), with the laptop-side watchdog pushed out
+/// of the way (10 s) as if the app were frozen. Same polling as above.
+void BM_DeadmanStopLatency(benchmark::State& state) {
+  Fixture fx(false);
+  qi::QiBridgeOptions o;
+  o.url = fx.server.url();
+  o.head_resend_period = std::chrono::milliseconds(0);
+  o.watchdog_timeout = std::chrono::milliseconds(10000);
+  qi::QiBridge bridge(o);
+  bridge.connect();
+  if (!bridge.robot_side_deadman()) {
+    state.SkipWithError("the mock's ALMotion has no moveTo(ffff)");
+    return;
+  }
+  std::vector<double> ms;
+  for (auto _ : state) {
+    bridge.move({0.1, 0.0, 0.2});
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::size_t seen = fx.robot.command_log().size();
+    double latency_ms = -1.0;
+    while (latency_ms < 0.0) {
+      std::this_thread::sleep_for(std::chrono::microseconds(500));
+      const auto elapsed = std::chrono::steady_clock::now() - t0;
+      const auto log = fx.robot.command_log();
+      for (std::size_t i = seen; i < log.size(); ++i) {
+        if (log[i].stop_move) {
+          latency_ms = std::chrono::duration<double, std::milli>(elapsed).count();
+          break;
+        }
+      }
+      if (elapsed > std::chrono::seconds(5)) {
+        state.SkipWithError("no robot-side stop within 5 s");
         return;
       }
     }
@@ -240,6 +289,7 @@ BENCHMARK(BM_QiBridgeNextFrameVgaPipelinedNoOdometry)->Unit(benchmark::kMillisec
 BENCHMARK(BM_MoveRoundTripTcp)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_MoveRoundTripTlsLogin)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_WatchdogStopLatency)->UseManualTime()->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DeadmanStopLatency)->UseManualTime()->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DecodeImageRemoteVgaView)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DecodeImageRemoteVgaToMat)->Unit(benchmark::kMicrosecond);
 

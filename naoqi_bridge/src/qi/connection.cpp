@@ -73,8 +73,10 @@ void MessageConnection::read_payload(std::size_t filled) {
   const std::size_t target = std::min(total, std::max(kChunk, filled * 2));
   payload_->resize(target);
   auto self = shared_from_this();
-  auto handler = [this, self, target](const boost::system::error_code& ec, std::size_t) {
-    if (ec) {
+  // The handler holds the buffer too: a close drops the member while this read may be pending.
+  auto handler = [this, self, target, buffer = payload_](const boost::system::error_code& ec,
+                                                          std::size_t) {
+    if (ec || !open_) {
       do_close("read failed in a " + std::to_string(header_.size) +
                "-byte payload: " + ec.message());
       return;
@@ -145,6 +147,11 @@ void MessageConnection::write_next() {
   auto self = shared_from_this();
   auto handler = [this, self](const boost::system::error_code& ec, std::size_t) {
     if (!queue_.empty()) queue_.pop_front();
+    if (!open_) {
+      writing_ = false;
+      queue_.clear();
+      return;
+    }
     if (ec) {
       writing_ = false;
       do_close("write failed: " + ec.message());
@@ -169,11 +176,18 @@ void MessageConnection::do_close(const std::string& reason) {
   boost::system::error_code ignored;
   socket().shutdown(tcp::socket::shutdown_both, ignored);
   socket().close(ignored);
+  // Drop everything the connection holds: the handlers (the server's close handler owns the
+  // connection's state, which owns this connection: keeping it would leak both), the payload
+  // being read (up to the announced size, 64 MiB by default) and what was queued to send.
+  CloseHandler on_close = std::move(on_close_);
+  on_close_ = nullptr;
+  on_message_ = nullptr;
+  payload_.reset();
+  if (!writing_) queue_.clear();  // a write in flight still reads its buffers; it pops itself
   if (!closed_notified_) {
     closed_notified_ = true;
-    if (on_close_) on_close_(reason);
+    if (on_close) on_close(reason);
   }
-  on_message_ = nullptr;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -5,6 +5,8 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/ssl.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -15,6 +17,7 @@
 #include <thread>
 
 #include "connection.hpp"
+#include "naoqi_bridge/qi/bounded_move.hpp"
 #include "naoqi_bridge/qi/image_remote.hpp"
 #include "naoqi_bridge/qi/message.hpp"
 #include "naoqi_bridge/qi/meta.hpp"
@@ -46,6 +49,12 @@ std::vector<std::string> MockServerOptions::validate() const {
   }
   if (disconnect_after_messages < 0) errors.push_back("disconnect_after_messages must be >= 0");
   if (malformed_reply_every_nth < 0) errors.push_back("malformed_reply_every_nth must be >= 0");
+  if (handshake_timeout.count() < 0) errors.push_back("handshake_timeout must be >= 0 (0 = off)");
+  if (idle_timeout.count() < 0) errors.push_back("idle_timeout must be >= 0 (0 = off)");
+  if (max_connections < 1 || max_connections > 100000) {
+    errors.push_back("max_connections must be in 1..100000, got " +
+                     std::to_string(max_connections));
+  }
   for (const auto& e : limits.validate()) errors.push_back("limits." + e);
   return errors;
 }
@@ -97,9 +106,12 @@ struct ServiceDef {
 
 struct ConnState {
   std::shared_ptr<detail::MessageConnection> conn;
+  std::weak_ptr<ConnState> self;  ///< for replies sent later (a moveTo answers when it ends)
   bool authenticated = false;
   bool commanded_base = false;
   std::uint64_t received = 0;
+  std::chrono::steady_clock::time_point accepted_at{};
+  std::chrono::steady_clock::time_point last_message_at{};
 };
 
 std::vector<std::string> names_arg(const Value& v, const char* what) {
@@ -202,6 +214,73 @@ std::string read_file(const std::string& path) {
   return ss.str();
 }
 
+
+void json_string(std::ostream& out, const std::string& text) {
+  out << '"';
+  for (const unsigned char ch : text) {
+    switch (ch) {
+      case '"':
+        out << "\\\"";
+        break;
+      case '\\':
+        out << "\\\\";
+        break;
+      case '\n':
+        out << "\\n";
+        break;
+      default:
+        if (ch < 0x20 || ch >= 0x7f) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", ch);
+          out << buf;
+        } else {
+          out << static_cast<char>(ch);
+        }
+    }
+  }
+  out << '"';
+}
+
+/// A received argument as JSON: numbers, booleans, strings and lists as such; raw buffers by
+/// size; anything else as its debug rendering.
+void json_value(std::ostream& out, const Value& v, int depth = 0) {
+  const Value& u = v.unwrapped();
+  const TypeKind k = u.kind();
+  if (k == TypeKind::kBool) {
+    out << (u.as_bool() ? "true" : "false");
+  } else if (is_numeric(k)) {
+    const double d = u.as_double();
+    if (std::isfinite(d)) {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.9g", d);
+      out << buf;
+    } else {
+      json_string(out, std::isnan(d) ? "nan" : (d > 0 ? "inf" : "-inf"));
+    }
+  } else if (k == TypeKind::kString) {
+    json_string(out, u.as_string());
+  } else if (k == TypeKind::kRaw) {
+    json_string(out, "<" + std::to_string(u.as_raw().size) + " bytes>");
+  } else if ((k == TypeKind::kList || k == TypeKind::kTuple || k == TypeKind::kVarArgs) &&
+             depth < 4) {
+    out << '[';
+    bool first = true;
+    for (const auto& e : u.elements()) {
+      if (!first) out << ',';
+      first = false;
+      json_value(out, e, depth + 1);
+    }
+    out << ']';
+  } else {
+    json_string(out, u.to_debug_string());
+  }
+}
+
+double unix_time_s() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace
 
 struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Impl> {
@@ -221,6 +300,10 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
   std::map<std::uint32_t, ServiceDef> services;  // by id
   std::map<std::string, std::uint32_t> service_ids;
   std::set<std::shared_ptr<ConnState>> conns;
+  /// TLS connections still in their handshake, with their accept time.
+  std::map<std::shared_ptr<detail::MessageConnection>, std::chrono::steady_clock::time_point>
+      handshaking;
+  std::unique_ptr<asio::steady_timer> sweep_timer;
   std::map<std::string, Subscription> subscriptions;
   std::map<std::string, double> stiffness;
   std::string life_state = "solitary";
@@ -229,7 +312,18 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
   bool collision_protection = true;
   bool awake = false;
   std::string posture = "Stand";
-  BaseVelocity last_velocity;
+  BaseVelocity last_velocity;  ///< what the base executes now (getRobotVelocity, moveIsActive)
+  /// The time-constrained moveTo in progress: NAOqi answers the Call when the move ends (it
+  /// reached its pose, or another motion command replaced it), and the base stops by itself at
+  /// the end whether or not the client is still there.
+  struct BoundedMove {
+    std::shared_ptr<asio::steady_timer> timer;
+    std::weak_ptr<ConnState> caller;
+    MessageHeader call;
+    bool post = false;
+  };
+  std::optional<BoundedMove> bounded_move;  // I/O thread only
+  std::ofstream call_log;                    // --log: one JSON line per call (I/O thread only)
   std::chrono::milliseconds latency{0};
   bool stall_frames = false;
   std::uint64_t image_requests = 0;
@@ -333,8 +427,10 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       return Value();
     });
     motion.add(114, "rest", "()", "v", [this](ConnState&, A) {
+      end_bounded_move(false);
       robot.stop_move();
       std::lock_guard lock(mutex);
+      last_velocity = {};
       awake = false;
       return Value();
     });
@@ -395,6 +491,12 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                },
                {"names", "useSensors"});
     auto do_move = [this](ConnState& c, double x, double y, double theta) {
+      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(theta)) {
+        // NAOqi refuses such a command; the base keeps what it was doing.
+        throw MethodFailure("ALMotion::move: non-finite velocity (" + std::to_string(x) + ", " +
+                            std::to_string(y) + ", " + std::to_string(theta) + ")");
+      }
+      end_bounded_move(false);  // a new velocity replaces a moveTo in progress
       c.commanded_base = true;
       BaseVelocity v{x, y, theta};
       robot.command_velocity(v);
@@ -418,7 +520,17 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                                 1.0 * a[2].as_double());
                },
                {"x", "y", "theta"});
+    // moveTo(x, y, theta, time) is answered by bounded_move() (the reply comes when it ends).
+    motion.add(144, "moveTo", "(ffff)", "v",
+               [](ConnState&, A) -> Value { throw MethodFailure("unreachable"); },
+               {"x", "y", "theta", "time"});
+    motion.add(175, "moveIsActive", "()", "b", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::boolean(last_velocity.v_x_m_s != 0.0 || last_velocity.v_y_m_s != 0.0 ||
+                            last_velocity.omega_rad_s != 0.0);
+    });
     motion.add(177, "stopMove", "()", "v", [this](ConnState&, A) {
+      end_bounded_move(false);
       robot.stop_move();
       std::lock_guard lock(mutex);
       last_velocity = {};
@@ -589,12 +701,54 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
   }
 
   // -------------------------------------------------------------------------------------------
+  // Call log (MockServerOptions::call_log_file): one JSON object per line, flushed at once so a
+  // test or an operator can follow it live.
+
+  void log_line(const std::string& body) {
+    if (!call_log.is_open()) return;
+    char t[32];
+    std::snprintf(t, sizeof t, "%.6f", unix_time_s());
+    call_log << "{\"t_unix_s\":" << t << "," << body << "}\n" << std::flush;
+  }
+
+  void log_call(const std::string& service, const std::string& method,
+                const std::vector<Value>& args) {
+    if (!call_log.is_open()) return;
+    std::ostringstream b;
+    b << "\"service\":";
+    json_string(b, service);
+    b << ",\"method\":";
+    json_string(b, method);
+    b << ",\"args\":[";
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      if (i) b << ',';
+      json_value(b, args[i]);
+    }
+    b << ']';
+    log_line(b.str());
+  }
+
+  void log_event(const std::string& what) {
+    if (!call_log.is_open()) return;
+    std::ostringstream b;
+    b << "\"event\":";
+    json_string(b, what);
+    log_line(b.str());
+  }
+
+  // -------------------------------------------------------------------------------------------
   // Networking
 
   void start() {
     const auto errors = options.validate();
     if (!errors.empty()) throw BridgeError("MockServerOptions: " + errors.front());
     url = parse_url(options.listen_url);
+    if (!options.call_log_file.empty()) {
+      call_log.open(options.call_log_file, std::ios::out | std::ios::app);
+      if (!call_log) {
+        throw BridgeError("mock server: cannot write the call log '" + options.call_log_file + "'");
+      }
+    }
     if (url.tls) {
       ssl_ctx = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
       ssl_ctx->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
@@ -635,6 +789,8 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     }
     work.emplace(asio::make_work_guard(io));
     accept_next();
+    sweep_timer = std::make_unique<asio::steady_timer>(io);
+    sweep_next();
     thread = std::thread([this] { io.run(); });
     running = true;
   }
@@ -646,6 +802,15 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     asio::post(io, [this] {
       boost::system::error_code ignored;
       if (acceptor) acceptor->close(ignored);
+      if (sweep_timer) sweep_timer->cancel();
+      if (bounded_move) bounded_move->timer->cancel();
+      std::map<std::shared_ptr<detail::MessageConnection>, std::chrono::steady_clock::time_point>
+          pending;
+      {
+        std::lock_guard lock(mutex);
+        pending.swap(handshaking);
+      }
+      for (auto& [conn, at] : pending) conn->socket().close(ignored);
       std::set<std::shared_ptr<ConnState>> all;
       {
         std::lock_guard lock(mutex);
@@ -667,15 +832,45 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     acceptor->async_accept(conn->socket(), [this, conn](const boost::system::error_code& ec) {
       Impl* const self = this;
       if (ec) {
-        if (ec != asio::error::operation_aborted && self->acceptor->is_open()) self->accept_next();
+        if (ec == asio::error::operation_aborted || !self->acceptor->is_open()) return;
+        if (ec == asio::error::connection_aborted) {  // reset while queued: next one at once
+          self->accept_next();
+          return;
+        }
+        // Out of descriptors (EMFILE) or similar: try again a little later instead of spinning.
+        auto retry = std::make_shared<asio::steady_timer>(io, std::chrono::milliseconds(100));
+        retry->async_wait([self, retry](const boost::system::error_code& e) {
+          if (!e && self->acceptor->is_open()) self->accept_next();
+        });
         return;
       }
       boost::system::error_code ignored;
+      bool full = false;
+      {
+        std::lock_guard lock(mutex);
+        full = conns.size() + handshaking.size() >=
+               static_cast<std::size_t>(options.max_connections);
+        if (full) ++stats.connections_refused;
+      }
+      if (full) {
+        conn->socket().close(ignored);  // at the limit: refuse at once, keep accepting
+        self->accept_next();
+        return;
+      }
       conn->socket().set_option(tcp::no_delay(true), ignored);
       if (conn->tls()) {
+        {
+          std::lock_guard lock(mutex);
+          handshaking[conn] = std::chrono::steady_clock::now();
+        }
         conn->tls()->async_handshake(asio::ssl::stream_base::server,
                                      [self, conn](const boost::system::error_code& ec2) {
-                                       if (ec2) {
+                                       bool timed_out = false;
+                                       {
+                                         std::lock_guard lock(self->mutex);
+                                         timed_out = self->handshaking.erase(conn) == 0;
+                                       }
+                                       if (ec2 || timed_out) {
                                          boost::system::error_code ig;
                                          conn->socket().close(ig);
                                          return;
@@ -689,9 +884,60 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     });
   }
 
+  /// Closes connections that stay silent: no TLS handshake and login within handshake_timeout,
+  /// or no message for idle_timeout. Runs on the I/O thread every sweep period.
+  void sweep_next() {
+    if (!sweep_timer) return;
+    sweep_timer->expires_after(sweep_period());
+    sweep_timer->async_wait([this](const boost::system::error_code& ec) {
+      if (ec) return;
+      const auto now = std::chrono::steady_clock::now();
+      std::vector<std::shared_ptr<detail::MessageConnection>> late_handshakes;
+      std::vector<std::pair<std::shared_ptr<ConnState>, std::string>> to_close;
+      {
+        std::lock_guard lock(mutex);
+        for (auto it = handshaking.begin(); it != handshaking.end();) {
+          if (options.handshake_timeout.count() > 0 &&
+              now - it->second > options.handshake_timeout) {
+            late_handshakes.push_back(it->first);
+            it = handshaking.erase(it);
+            ++stats.connections_timed_out;
+          } else {
+            ++it;
+          }
+        }
+        for (const auto& c : conns) {
+          if (!c->authenticated && options.handshake_timeout.count() > 0 &&
+              now - c->accepted_at > options.handshake_timeout) {
+            to_close.emplace_back(c, "no login within the handshake timeout");
+          } else if (options.idle_timeout.count() > 0 &&
+                     now - c->last_message_at > options.idle_timeout) {
+            to_close.emplace_back(c, "idle timeout");
+          }
+        }
+        stats.connections_timed_out += to_close.size();
+      }
+      boost::system::error_code ignored;
+      for (auto& conn : late_handshakes) conn->socket().close(ignored);
+      for (auto& [c, why] : to_close) c->conn->close(why);
+      sweep_next();
+    });
+  }
+
+  std::chrono::milliseconds sweep_period() const {
+    std::chrono::milliseconds p{1000};
+    for (const auto t : {options.handshake_timeout, options.idle_timeout}) {
+      if (t.count() > 0) p = std::min(p, t / 4);
+    }
+    return std::max(p, std::chrono::milliseconds(10));
+  }
+
   void begin(const std::shared_ptr<detail::MessageConnection>& conn) {
     auto state = std::make_shared<ConnState>();
     state->conn = conn;
+    state->self = state;
+    state->accepted_at = std::chrono::steady_clock::now();
+    state->last_message_at = state->accepted_at;
     {
       std::lock_guard lock(mutex);
       conns.insert(state);
@@ -728,7 +974,83 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       stats.connections_open = conns.size();
       if (stop_base) ++stats.base_stops_on_disconnect;
     }
-    if (stop_base) robot.stop_move();  // a lost client must not leave the base driving
+    if (stop_base) {
+      // Only with the option: a real NAOqi keeps the last velocity when its client goes away.
+      end_bounded_move(false);
+      robot.stop_move();
+      std::lock_guard lock(mutex);
+      last_velocity = {};
+    }
+  }
+
+  /// Ends the moveTo in progress, if any: answers its Call (when the caller is still connected)
+  /// and, when it ran to its end (`reached`), stops the base as NAOqi does at the target pose.
+  void end_bounded_move(bool reached) {
+    if (!bounded_move) return;
+    BoundedMove m = std::move(*bounded_move);
+    bounded_move.reset();
+    m.timer->cancel();
+    if (reached) {
+      robot.stop_move();
+      std::lock_guard lock(mutex);
+      last_velocity = {};
+      ++stats.bounded_moves_ended;
+    }
+    log_event(reached ? "moveTo reached its pose: base stopped" : "moveTo replaced");
+    auto caller = m.caller.lock();
+    if (caller && !m.post) {
+      MessageHeader r = m.call;
+      r.type = MessageType::kReply;
+      r.flags = 0;
+      std::vector<std::uint8_t> payload;
+      if (options.dynamic_replies) {
+        payload = encode(Value::dynamic(Value()));
+        r.flags = flags::kDynamicPayload;
+      }
+      send_reply(*caller, r, std::move(payload), false);
+    }
+  }
+
+  /// ALMotion.moveTo(x, y, theta, time): drives the constant twist that reaches the pose in
+  /// `time` (bounded_move.hpp), then stops by itself; the Call is answered at the end.
+  void bounded_move_call(ConnState& c, const MessageHeader& h, const std::vector<Value>& a,
+                         bool post) {
+    const double x = a.at(0).as_double();
+    const double y = a.at(1).as_double();
+    const double theta = a.at(2).as_double();
+    const double time_s = a.at(3).as_double();
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(theta) ||
+        !std::isfinite(time_s) || time_s <= 0.0) {
+      if (!post) {
+        send_error(c, h,
+                   "ALMotion::moveTo: invalid target (" + std::to_string(x) + ", " +
+                       std::to_string(y) + ", " + std::to_string(theta) + ") in " +
+                       std::to_string(time_s) + " s");
+      }
+      return;
+    }
+    end_bounded_move(false);
+    const BaseVelocity v = velocity_reaching({x, y, theta}, time_s);
+    c.commanded_base = true;
+    robot.command_velocity(v);
+    {
+      std::lock_guard lock(mutex);
+      last_velocity = v;
+    }
+    BoundedMove m;
+    m.timer = std::make_shared<asio::steady_timer>(
+        io, std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                std::chrono::duration<double>(time_s)));
+    m.caller = c.self;
+    m.call = h;
+    m.post = post;
+    std::weak_ptr<asio::steady_timer> timer_of_this_move = m.timer;
+    m.timer->async_wait([this, timer_of_this_move](const boost::system::error_code& ec) {
+      if (ec) return;  // cancelled: replaced or ended already
+      auto t = timer_of_this_move.lock();
+      if (t && bounded_move && bounded_move->timer == t) end_bounded_move(true);
+    });
+    bounded_move = std::move(m);
   }
 
   void send_reply(ConnState& c, MessageHeader h, std::vector<std::uint8_t> payload,
@@ -774,6 +1096,7 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       ++stats.messages_received;
     }
     ++c.received;
+    c.last_message_at = std::chrono::steady_clock::now();
     if (options.disconnect_after_messages > 0 &&
         c.received > static_cast<std::uint64_t>(options.disconnect_after_messages)) {
       c.conn->close("fault injection: disconnect after " +
@@ -839,6 +1162,12 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       if (!post) send_error(c, h, "ISerialization error Status Read Past End");
       return;
     }
+    log_call(svc->name, md.meta.name, args);
+    if (svc->name == "ALMotion" && md.meta.name == "moveTo" &&
+        md.meta.parameters_signature == "(ffff)") {
+      bounded_move_call(c, h, args, post);
+      return;
+    }
     if (svc->name == "ALVideoDevice" && md.meta.name == "getImageRemote") {
       serve_image(c, h, args.at(0).as_string(), post);
       return;
@@ -878,6 +1207,30 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                  std::string("Authentication failed: malformed capability map: ") + e.what());
       c.conn->close_after_flush("malformed authenticate");
       return;
+    }
+    if (call_log.is_open()) {
+      // The login keys are logged by presence (user name, token length), never the token.
+      std::ostringstream b;
+      b << "\"service\":\"Server\",\"method\":\"authenticate\",\"args\":[{";
+      bool first = true;
+      for (const auto& [key, value] : theirs) {
+        if (!first) b << ',';
+        first = false;
+        json_string(b, key);
+        b << ':';
+        if (key == "auth_token") {
+          std::size_t n = 0;
+          try {
+            n = value.unwrapped().as_string().size();
+          } catch (const ProtocolError&) {
+          }
+          json_string(b, "<" + std::to_string(n) + " characters>");
+        } else {
+          json_value(b, value);
+        }
+      }
+      b << "}]";
+      log_line(b.str());
     }
     if (!options.user.empty()) {
       auto get = [&](const char* k) -> std::string {

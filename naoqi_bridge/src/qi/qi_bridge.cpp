@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "naoqi_bridge/qi/bounded_move.hpp"
 #include "naoqi_bridge/qi/image_remote.hpp"
 
 namespace pepper::naoqi_bridge::qi {
@@ -52,6 +53,7 @@ std::vector<std::string> QiBridgeOptions::validate() const {
   range("watchdog_timeout", watchdog_timeout, 50, 10000);
   range("frame_stall_timeout", frame_stall_timeout, 50, 60000);
   range("watchdog_period", watchdog_period, 1, 1000);
+  if (deadman_horizon.count() != 0) range("deadman_horizon", deadman_horizon, 50, 2000);
   range("reconnect_initial_backoff", reconnect_initial_backoff, 0, 60000);
   range("reconnect_max_backoff", reconnect_max_backoff, 0, 600000);
   range("head_settle_timeout", head_settle_timeout, 0, 60000);
@@ -92,6 +94,7 @@ QiBridge::QiBridge(QiBridgeOptions options) : options_(std::move(options)) {
   so.user = options_.user;
   so.password = options_.password;
   so.tls_pin_sha256 = options_.tls_pin_sha256;
+  so.verify_certificate = options_.verify_certificate;
   so.limits = options_.limits;
   session_ = std::make_unique<QiSession>(so);
   session_->set_disconnect_handler([this](const std::string& why) {
@@ -138,6 +141,30 @@ QiBridge::Counters QiBridge::counters() const {
   return counters_;
 }
 
+std::string QiBridge::last_move_error() const {
+  std::lock_guard lock(mutex_);
+  return last_move_error_;
+}
+
+bool QiBridge::robot_side_deadman() const {
+  std::lock_guard lock(mutex_);
+  return bounded_moves_;
+}
+
+std::string QiBridge::robot_side_deadman_summary() const {
+  std::lock_guard lock(mutex_);
+  if (bounded_moves_) {
+    return "ALMotion.moveTo(x, y, theta, time): every velocity command ends by itself on the "
+           "robot after " + ms(options_.deadman_horizon) + " without a fresh one";
+  }
+  if (options_.deadman_horizon.count() == 0) {
+    return "off (deadman_horizon 0): plain ALMotion.move; a frozen or killed laptop leaves the "
+           "base driving";
+  }
+  return "none: this ALMotion has no moveTo(x, y, theta, time); a frozen or killed laptop "
+         "leaves the base driving (only the laptop-side watchdog stops it)";
+}
+
 std::string QiBridge::last_stop_reason() const {
   std::lock_guard lock(mutex_);
   return last_stop_reason_;
@@ -175,7 +202,11 @@ void QiBridge::open_session() {
       awareness = session_->service("ALBasicAwareness");
     } catch (const ServiceNotFound&) {
     }
+    const bool bounded =
+        options_.deadman_horizon.count() > 0 && motion.meta.find("moveTo", "(ffff)") != nullptr;
     std::lock_guard lock(mutex_);
+    bounded_moves_ = bounded;
+    last_bounded_ = PendingCall();
     motion_ = std::move(motion);
     video_ = std::move(video);
     life_ = std::move(life);
@@ -508,7 +539,18 @@ void QiBridge::move(const BaseVelocity& velocity) {
     motion = motion_;
   }
   if (!motion || !connected()) throw ConnectionLost("move: not connected to " + describe());
+  const bool zero =
+      velocity.v_x_m_s == 0.0 && velocity.v_y_m_s == 0.0 && velocity.omega_rad_s == 0.0;
+  bool bounded = false;
+  {
+    std::lock_guard lock(mutex_);
+    bounded = bounded_moves_;
+  }
   try {
+    if (bounded && !zero) {
+      send_bounded_move(*motion, velocity);
+      return;
+    }
     PendingCall call;
     {
       std::lock_guard send_lock(motion_send_mutex_);
@@ -529,6 +571,46 @@ void QiBridge::move(const BaseVelocity& velocity) {
   } catch (...) {
     stop_base("exception in move");
     throw;
+  }
+}
+
+void QiBridge::send_bounded_move(const ServiceHandle& motion, const BaseVelocity& velocity) {
+  reap_bounded_move();
+  const double horizon_s = std::chrono::duration<double>(options_.deadman_horizon).count();
+  const RelativePose target = pose_after(velocity, horizon_s);
+  {
+    std::lock_guard send_lock(motion_send_mutex_);
+    // Not awaited: NAOqi answers a moveTo when it ends (replaced by the next command, or at the
+    // horizon), so waiting here would hold the control loop for the whole horizon.
+    PendingCall call = session_->call_async(
+        motion, "moveTo", "(ffff)",
+        {Value::float32(static_cast<float>(target.x_m)),
+         Value::float32(static_cast<float>(target.y_m)),
+         Value::float32(static_cast<float>(target.theta_rad)),
+         Value::float32(static_cast<float>(horizon_s))});
+    last_move_ns_ = mono_ns();
+    moving_ = true;
+    std::lock_guard lock(mutex_);
+    last_bounded_ = std::move(call);
+    ++counters_.moves;
+  }
+}
+
+void QiBridge::reap_bounded_move() {
+  PendingCall previous;
+  {
+    std::lock_guard lock(mutex_);
+    previous = last_bounded_;
+  }
+  if (!previous.valid() || !previous.ready()) return;
+  try {
+    (void)previous.get(std::chrono::milliseconds(0));
+  } catch (const RemoteCallError& e) {
+    // The robot refused or aborted a move. Kept for the operator rather than thrown: a moveTo
+    // that a later command replaced may end this way on some NAOqi versions.
+    std::lock_guard lock(mutex_);
+    ++counters_.bounded_move_errors;
+    last_move_error_ = e.what();
   }
 }
 

@@ -410,6 +410,14 @@ void QiSession::connect(const std::string& url_text) {
       throw TlsError("TLS certificate of " + where + " has SHA-256 fingerprint " + fingerprint +
                      ", which does not match the pinned " + options_.tls_pin_sha256);
     }
+    if (options_.verify_certificate) {
+      try {
+        options_.verify_certificate(url.to_string(), fingerprint);
+      } catch (...) {
+        conn->close("certificate not trusted");  // nothing, no login, was sent
+        throw;
+      }
+    }
   }
 
   std::uint64_t gen = 0;

@@ -34,6 +34,18 @@ int report_error(const std::string& what) {
   return 1;
 }
 
+void add_trust_options(CLI::App* cmd, std::string& tls_pin, bool& trust_new_robot) {
+  cmd->add_option("--tls-pin", tls_pin,
+                  "tcps://: the robot certificate's SHA-256 fingerprint (AB:CD:...); any other "
+                  "certificate is refused before the password is sent (default: the "
+                  "known-robots file, trust on first use)");
+  cmd->add_flag("--trust-new-robot", trust_new_robot,
+                "tcps://: trust a robot seen for the first time and remember its certificate "
+                "fingerprint in the known-robots file ($PEPPER_KNOWN_ROBOTS, else "
+                "~/.config/pepper_nav/known_robots); without it you are asked, or refused "
+                "when there is no terminal");
+}
+
 void add_config_options(CLI::App* cmd, std::string& file, std::string& preset,
                         std::vector<std::string>& sets, const std::string& set_example) {
   std::vector<std::string> names;

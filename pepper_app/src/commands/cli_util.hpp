@@ -36,6 +36,10 @@ std::optional<core::CameraIntrinsics> load_camera_option(const std::string& path
 void add_config_options(CLI::App* cmd, std::string& file, std::string& preset,
                         std::vector<std::string>& sets, const std::string& set_example);
 
+/// Adds --tls-pin SHA256 and --trust-new-robot (tcps:// robots; session/known_robots.hpp), as
+/// every command that connects to a robot takes them.
+void add_trust_options(CLI::App* cmd, std::string& tls_pin, bool& trust_new_robot);
+
 /// Prints "pepper_app: error: <what>" to stderr and returns exit code 1.
 int report_error(const std::string& what);
 

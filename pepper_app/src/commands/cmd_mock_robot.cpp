@@ -27,11 +27,14 @@ struct MockRobotArgs {
   std::string password_file;
   std::string tls_cert;
   std::string tls_key;
+  std::string log_file;
   int latency_ms = 0;
   int drop_every = 0;
   int disconnect_after = 0;
   int malformed_every = 0;
   double rate_hz = 15.0;
+  double idle_timeout_s = 60.0;
+  int max_connections = 64;
   bool legacy_service_info = false;
   bool lockstep = false;
 };
@@ -47,6 +50,9 @@ int run_mock_robot(const MockRobotArgs& a) {
   so.malformed_reply_every_nth = a.malformed_every;
   so.legacy_service_info = a.legacy_service_info;
   so.pace_frames = !a.lockstep;
+  so.call_log_file = a.log_file;
+  so.idle_timeout = std::chrono::milliseconds(static_cast<long>(a.idle_timeout_s * 1000.0));
+  so.max_connections = a.max_connections;
   if (!a.user.empty()) {
     so.user = a.user;
     if (!a.password_file.empty()) {
@@ -103,7 +109,8 @@ int run_mock_robot(const MockRobotArgs& a) {
   std::cout << "\nstopped (" << (sig == SIGINT ? "SIGINT" : "SIGTERM")
             << "): " << st.connections_accepted << " connections, " << st.messages_received
             << " messages, " << st.frames_served << " frames, " << st.auth_failures
-            << " failed logins, " << st.base_stops_on_disconnect << " base stops on disconnect\n";
+            << " failed logins, " << st.bounded_moves_ended
+            << " time-constrained moves that stopped the base by themselves\n";
   return 0;
 }
 
@@ -130,6 +137,18 @@ void register_mock_robot_command(CLI::App& app) {
                   "PEM certificate for tcps (default: self-signed, "
                   "generated at start-up)");
   cmd->add_option("--tls-key", args->tls_key, "PEM private key for --tls-cert");
+  cmd->add_option("--log", args->log_file,
+                  "Append one JSON line per call received (service, method, arguments, time) "
+                  "to this file; login tokens are logged by length only");
+  cmd->add_option("--idle-timeout-s", args->idle_timeout_s,
+                  "Close a connection that sends nothing for this long (0 = never); the TLS "
+                  "handshake and login must finish within 5 s")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
+  cmd->add_option("--max-connections", args->max_connections,
+                  "Connections served at once; more are closed on accept")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cmd->add_option("--rate", args->rate_hz, "Simulated camera frame rate, Hz (lockstep clock)")
       ->capture_default_str();
   cmd->add_option("--latency-ms", args->latency_ms, "Fault injection: delay every reply")

@@ -43,8 +43,12 @@ struct RobotConfig {
   double head_yaw_rad = 0.0;
   double watchdog_s = 0.3;       ///< bridge stops the base without a fresh command this long
   double frame_timeout_s = 1.0;  ///< session stops the base when no frame comes this long
-  /// The two as whole milliseconds, as the sessions and the bridge take them.
+  /// Robot-side deadman: each velocity command ends by itself on the robot after this long
+  /// (ALMotion.moveTo with a time; docs/naoqi_bridge.md). 0 = plain move(), no robot-side stop.
+  double deadman_horizon_s = 0.25;
+  /// The three as whole milliseconds, as the sessions and the bridge take them.
   int watchdog_ms() const { return static_cast<int>(std::lround(watchdog_s * 1e3)); }
+  int deadman_horizon_ms() const { return static_cast<int>(std::lround(deadman_horizon_s * 1e3)); }
   int frame_timeout_ms() const { return static_cast<int>(std::lround(frame_timeout_s * 1e3)); }
   std::string user;              ///< login user for tcps:// (NAOqi 2.9: "nao"); password never here
   /// The rule between fields (640x480 or 320x240); each field's range is in the table.

@@ -673,6 +673,10 @@ std::vector<Parameter> build_table() {
     row("robot.frame_timeout_s",
         robot, &RobotConfig::frame_timeout_s, "s", "[0.1, 10]",
         "the session stops the base when no frame comes this long"),
+    row("robot.deadman_horizon_s",
+        robot, &RobotConfig::deadman_horizon_s, "s", "0 (off) or [0.05, 2]",
+        "tcp/tcps robots: each velocity command ends by itself on the robot after this long "
+        "(ALMotion.moveTo with a time), so a frozen or killed laptop cannot leave it driving"),
     row("robot.user",
         robot, &RobotConfig::user, "", "",
         "login user for tcps:// (NAOqi 2.9: nao); the password is never here"),

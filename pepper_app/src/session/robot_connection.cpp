@@ -8,6 +8,7 @@
 #include "naoqi_bridge/qi/qi_bridge.hpp"
 #include "naoqi_bridge/qi/session.hpp"
 #include "naoqi_bridge/qi/url.hpp"
+#include "session/known_robots.hpp"
 #include "sim/world.hpp"
 
 namespace pepper::app {
@@ -94,6 +95,17 @@ RobotConnection open_robot(const std::string& url, const RobotConnectOptions& op
   qo.password = login.password;
   qo.watchdog_timeout = std::chrono::milliseconds(options.watchdog_ms);
   qo.frame_stall_timeout = std::chrono::milliseconds(options.frame_stall_ms);
+  qo.deadman_horizon = std::chrono::milliseconds(options.deadman_horizon_ms);
+  if (c.url.kind == RobotUrl::Kind::kTcps) {
+    qo.tls_pin_sha256 = options.tls_pin;
+    if (options.tls_pin.empty()) {
+      TrustOptions trust;
+      trust.file = options.known_robots_file;
+      trust.trust_new_robot = options.trust_new_robot;
+      trust.allow_prompt = options.allow_prompt;
+      qo.verify_certificate = known_robots_verifier(trust);
+    }
+  }
   const auto problems = qo.validate();
   if (!problems.empty()) {
     std::string all;

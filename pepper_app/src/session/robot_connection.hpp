@@ -38,8 +38,12 @@ struct RobotConnectOptions {
   std::string user;                 ///< login user (tcps; "nao" on NAOqi 2.9)
   std::string password_file;        ///< first line is the password
   bool allow_prompt = true;         ///< prompt on the terminal when no file/env password
+  std::string tls_pin;              ///< tcps: required fingerprint; empty: the known-robots file
+  bool trust_new_robot = false;     ///< tcps: first contact trusted and saved without asking
+  std::filesystem::path known_robots_file;  ///< empty: default_known_robots_file()
   int watchdog_ms = 300;            ///< QiBridge: stop without a fresh move() this long
   int frame_stall_ms = 1000;        ///< QiBridge: stop when moving and frames stall this long
+  int deadman_horizon_ms = 250;     ///< QiBridge: robot-side end of each command; 0 = off
   double mock_frame_rate_hz = 15.0; ///< mock: simulated camera rate (lockstep)
 };
 
@@ -68,7 +72,9 @@ struct RobotLogin {
 RobotLogin robot_login(bool tls, const std::string& user, const std::string& password_file,
                        bool allow_prompt, const std::string& url);
 
-/// Builds the bridge for `url` (does not connect).
+/// Builds the bridge for `url` (does not connect). tcps:// robots are checked at connect(),
+/// before the login is sent: against `tls_pin` when given, else against the known-robots file
+/// (trust on first use, session/known_robots.hpp).
 RobotConnection open_robot(const std::string& url, const RobotConnectOptions& options);
 
 }  // namespace pepper::app

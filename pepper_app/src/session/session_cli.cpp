@@ -18,6 +18,7 @@ void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool wit
     cmd->add_option("--password-file", args.password_file,
                     "File whose first line is the password (else $PEPPER_PASSWORD, else a prompt)")
         ->check(CLI::ExistingFile);
+    add_trust_options(cmd, args.tls_pin, args.trust_new_robot);
   }
   add_config_options(cmd, args.config_file, args.preset, args.sets, "robot.camera_fps=10");
   cmd->add_flag("--ui", args.ui, "Serve the teach UI on 127.0.0.1 (port: ui.port)");
@@ -33,8 +34,11 @@ RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const A
   RobotConnectOptions o;
   o.user = args.user.empty() ? config.robot.user : args.user;
   o.password_file = args.password_file;
+  o.tls_pin = args.tls_pin;
+  o.trust_new_robot = args.trust_new_robot;
   o.watchdog_ms = config.robot.watchdog_ms();
   o.frame_stall_ms = config.robot.frame_timeout_ms();
+  o.deadman_horizon_ms = config.robot.deadman_horizon_ms();
   o.mock_frame_rate_hz = config.robot.camera_fps;
   return o;
 }

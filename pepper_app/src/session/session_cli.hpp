@@ -31,10 +31,12 @@ struct CommonSessionArgs {
   int ui_port = -1;  ///< -1: config ui.port; 0: any free port
   std::string user;
   std::string password_file;
+  std::string tls_pin;           ///< tcps: required certificate fingerprint (replaces the file)
+  bool trust_new_robot = false;  ///< tcps: trust and remember a robot seen for the first time
 };
 
-/// Adds --config, --preset, --set, --ui, --ui-port (and --robot, --user, --password-file when
-/// `with_robot`).
+/// Adds --config, --preset, --set, --ui, --ui-port (and --robot, --user, --password-file,
+/// --tls-pin, --trust-new-robot when `with_robot`).
 void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool with_robot);
 
 /// Defaults + --preset + --config file + --set overrides, validated. Throws ConfigError listing

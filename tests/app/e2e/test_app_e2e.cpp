@@ -22,6 +22,7 @@
 
 #include "core/memory/visual_memory.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
+#include "naoqi_bridge/qi/session.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/world.hpp"
 
@@ -436,6 +437,130 @@ TEST(AppE2E, BadOptionsRefusedBeforeConnecting) {
   EXPECT_NE(bad.wait(), 0);
   EXPECT_NE(bad.err().find("frame_timeout_s"), std::string::npos) << bad.both();
   EXPECT_FALSE(fs::exists(dir / "m.recording"));
+}
+
+// ---- Issue 23: a frozen or killed laptop must not leave the base driving. ---------------------
+// `pepper_app mock-robot` (which, like a real NAOqi, keeps the last velocity when its client goes
+// quiet or away) serves a textured world; `replay` drives it over loopback tcp. The test freezes
+// (SIGSTOP for 1 s) and later kills (SIGKILL) the replay while it drives, and watches the
+// robot's own velocity through a second client (ALMotion.getRobotVelocity). Every stop path of
+// the app lives in the frozen process, so only the robot-side deadman (each command a
+// time-constrained moveTo, robot.deadman_horizon_s = 0.25 s) can stop the base in time. Bound:
+// 700 ms, generous for a loaded machine yet below the 1 s freeze, after which the app's own
+// watchdog would have stopped it. The measured figures are printed ("[measured]").
+
+namespace qi = naoqi_bridge::qi;
+
+/// Polls the robot's velocity until it reads zero; milliseconds from `since`, or -1 after
+/// `limit`.
+double ms_until_base_stopped(qi::QiSession& watcher, const qi::ServiceHandle& motion,
+                             std::chrono::steady_clock::time_point since,
+                             std::chrono::milliseconds limit) {
+  while (std::chrono::steady_clock::now() - since < limit) {
+    const auto v = watcher.call(motion, "getRobotVelocity", "()", {}).elements();
+    if (v.size() == 3 && v[0].as_double() == 0.0 && v[1].as_double() == 0.0 &&
+        v[2].as_double() == 0.0) {
+      return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+          .count();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return -1.0;
+}
+
+bool base_moving(qi::QiSession& watcher, const qi::ServiceHandle& motion) {
+  const auto v = watcher.call(motion, "getRobotVelocity", "()", {}).elements();
+  return v.size() == 3 && (v[0].as_double() != 0.0 || v[2].as_double() != 0.0);
+}
+
+/// Waits until the base has been driven by the replay for a few consecutive polls.
+bool wait_driving(qi::QiSession& watcher, const qi::ServiceHandle& motion,
+                  std::chrono::seconds limit) {
+  const auto end = std::chrono::steady_clock::now() + limit;
+  int in_a_row = 0;
+  while (std::chrono::steady_clock::now() < end) {
+    in_a_row = base_moving(watcher, motion) ? in_a_row + 1 : 0;
+    if (in_a_row >= 5) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+std::string served_url(const Child& mock) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < end) {
+    const std::string out = mock.out();
+    const auto at = out.find(" on tcp://");
+    if (at != std::string::npos) {
+      const auto start = at + 4;
+      return out.substr(start, out.find_first_of(" \n", start) - start);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return "";
+}
+
+TEST(AppE2E, FrozenOrKilledReplayEndsInAStoppedBaseOnMockNaoqi) {
+  const fs::path dir = fresh_dir("deadman");
+  Child teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+                   "--max-distance", "2.0"},
+                  kQvga),
+              dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+
+  Child mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile, "--log",
+              (dir / "calls.jsonl").string()},
+             dir, "mock");
+  const std::string url = served_url(mock);
+  ASSERT_FALSE(url.empty()) << mock.both();
+  qi::QiSession watcher;
+  watcher.connect(url);
+  const auto motion = watcher.service("ALMotion");
+
+  // A 1 s freeze is a 1 s frame gap for the app: keep its frame timeout above it so the replay
+  // goes on driving after SIGCONT (the second half kills it while driving).
+  Child replay(cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
+                    "2000", "--set", "robot.frame_timeout_s=3"},
+                   kQvga),
+               dir, "replay");
+  ASSERT_TRUE(wait_driving(watcher, motion, std::chrono::seconds(60))) << replay.both();
+
+  // 1. Frozen for 1 s (a swapping laptop looks the same).
+  replay.signal(SIGSTOP);
+  const auto frozen_at = std::chrono::steady_clock::now();
+  const double stop_after_freeze_ms =
+      ms_until_base_stopped(watcher, motion, frozen_at, std::chrono::milliseconds(700));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000) -
+                              (std::chrono::steady_clock::now() - frozen_at));
+  EXPECT_FALSE(base_moving(watcher, motion));  // still stopped at the end of the freeze
+  replay.signal(SIGCONT);
+  std::cout << "[measured] SIGSTOP -> base stopped: " << stop_after_freeze_ms << " ms\n";
+  EXPECT_GE(stop_after_freeze_ms, 0.0) << "the base kept driving while the app was frozen";
+
+  // 2. Killed while driving again.
+  ASSERT_TRUE(wait_driving(watcher, motion, std::chrono::seconds(30))) << replay.both();
+  replay.signal(SIGKILL);
+  const auto killed_at = std::chrono::steady_clock::now();
+  const double stop_after_kill_ms =
+      ms_until_base_stopped(watcher, motion, killed_at, std::chrono::milliseconds(700));
+  std::cout << "[measured] SIGKILL -> base stopped: " << stop_after_kill_ms << " ms\n";
+  EXPECT_GE(stop_after_kill_ms, 0.0) << "the base kept driving after the app was killed";
+  EXPECT_EQ(replay.wait(std::chrono::seconds(5)), 128 + SIGKILL);
+  // The robot ended the commands itself: the mock's log says so, and the base stays stopped.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_FALSE(base_moving(watcher, motion));
+  EXPECT_FALSE(watcher.call(motion, "moveIsActive", "()", {}).as_bool());
+  const auto calls = read_jsonl(dir / "calls.jsonl");
+  int bounded = 0;
+  int ended = 0;
+  for (const auto& c : calls) {
+    bounded += c.value("method", "") == "moveTo";
+    ended += c.value("event", "").find("reached its pose") != std::string::npos;
+  }
+  EXPECT_GE(bounded, 4);  // each driving phase sent several
+  EXPECT_GE(ended, 2);
+  mock.signal(SIGINT);
+  EXPECT_EQ(mock.wait(std::chrono::seconds(10)), 0) << mock.both();
 }
 
 }  // namespace

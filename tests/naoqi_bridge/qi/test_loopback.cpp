@@ -1,6 +1,7 @@
 // QiBridge / QiSession against MockNaoqiServer over loopback (ephemeral ports): frames, moves,
 // watchdog, disconnects, login, TLS, malformed replies. Every byte crosses the real wire format.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/io_context.hpp>
@@ -8,6 +9,11 @@
 #include <boost/asio/read.hpp>
 #include <boost/asio/write.hpp>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <limits>
 #include <thread>
 
 #include "naoqi_bridge/qi/mock_server.hpp"
@@ -41,6 +47,18 @@ bool wait_until(Pred pred, std::chrono::milliseconds limit) {
     std::this_thread::sleep_for(5ms);
   }
   return pred();
+}
+
+/// Waits until the robot's last command is a forward speed of `v_x_m_s` (a velocity command
+/// goes out as a moveTo whose answer the bridge does not await).
+bool wait_last_forward(const SyntheticPatternRobot& robot, double v_x_m_s) {
+  return wait_until(
+      [&] {
+        const auto log = robot.command_log();
+        return !log.empty() && !log.back().stop_move &&
+               std::fabs(log.back().velocity.v_x_m_s - v_x_m_s) < 1e-5;
+      },
+      2000ms);
 }
 
 bool is_stop(const sim::CommandRecord& r) {
@@ -185,10 +203,10 @@ TEST(QiLoopback, CommandedMovesArriveAndStopSendsZeroThenStopMove) {
   qi::QiBridge bridge(bridge_options(server));
   bridge.connect();
   bridge.move({0.2, 0.0, -0.15});
+  ASSERT_TRUE(wait_last_forward(robot, 0.2));
   auto log = robot.command_log();
-  ASSERT_FALSE(log.empty());
-  EXPECT_FLOAT_EQ(static_cast<float>(log.back().velocity.v_x_m_s), 0.2f);
-  EXPECT_FLOAT_EQ(static_cast<float>(log.back().velocity.omega_rad_s), -0.15f);
+  EXPECT_NEAR(log.back().velocity.omega_rad_s, -0.15, 1e-5);
+  EXPECT_NEAR(log.back().velocity.v_y_m_s, 0.0, 1e-5);
   EXPECT_FALSE(log.back().stop_move);
   bridge.stop();
   log = robot.command_log();
@@ -206,6 +224,7 @@ TEST(QiLoopback, WatchdogStopsBaseWhenAppStalls) {
   server.start();
   auto o = bridge_options(server);
   o.watchdog_timeout = 300ms;
+  o.deadman_horizon = 0ms;  // the laptop-side watchdog alone (the robot-side stop is tested below)
   qi::QiBridge bridge(o);
   bridge.connect();
   bridge.move({0.1, 0.0, 0.0});
@@ -238,6 +257,7 @@ TEST(QiLoopback, StalledFramesStopTheBase) {
   server.start();
   auto o = bridge_options(server);
   o.frame_stall_timeout = 300ms;
+  o.deadman_horizon = 0ms;  // the laptop-side stop alone
   o.watchdog_timeout = 1000ms;
   qi::QiBridge bridge(o);
   bridge.connect();
@@ -263,10 +283,13 @@ TEST(QiLoopback, DisconnectLeavesBaseStoppedAndLatchesNeedsOperator) {
   bridge.start_camera({});
   ASSERT_TRUE(bridge.next_frame(3000ms).has_value());
   bridge.move({0.2, 0.0, 0.3});
+  ASSERT_TRUE(wait_last_forward(robot, 0.2));  // arrived (its answer is not awaited)
   server.disconnect_all();
   ASSERT_TRUE(wait_until([&] { return bridge.state() == nb::ConnectionState::kLost; }, 3000ms));
-  // Server side: the mock stops the base when the commanding connection drops.
-  ASSERT_TRUE(wait_until([&] { return server.stats().base_stops_on_disconnect > 0; }, 2000ms));
+  // Server side: like a real NAOqi the mock does not stop on disconnect; the last command was a
+  // time-constrained moveTo, which ends by itself within the bridge's horizon.
+  ASSERT_TRUE(wait_until([&] { return server.stats().bounded_moves_ended > 0; }, 2000ms));
+  EXPECT_EQ(server.stats().base_stops_on_disconnect, 0u);
   EXPECT_TRUE(robot.command_log().back().stop_move);
   // Client side: latched, move refused, frames report the loss.
   EXPECT_TRUE(bridge.needs_operator());
@@ -291,7 +314,7 @@ TEST(QiLoopback, DisconnectLeavesBaseStoppedAndLatchesNeedsOperator) {
   // Operator action 2: clear the fault; moving works again.
   bridge.clear_fault();
   EXPECT_NO_THROW(bridge.move({0.1, 0.0, 0.0}));
-  EXPECT_FLOAT_EQ(static_cast<float>(robot.command_log().back().velocity.v_x_m_s), 0.1f);
+  EXPECT_TRUE(wait_last_forward(robot, 0.1));
 }
 
 TEST(QiLoopback, WrongPasswordIsReportedAsSuch) {
@@ -352,7 +375,7 @@ TEST(QiLoopback, TlsWithLoginWorks) {
   ASSERT_TRUE(f.has_value());
   EXPECT_TRUE(SyntheticPatternRobot::verify_frame(f->gray).has_value());
   bridge.move({0.1, 0.0, 0.0});
-  EXPECT_FLOAT_EQ(static_cast<float>(robot.command_log().back().velocity.v_x_m_s), 0.1f);
+  EXPECT_TRUE(wait_last_forward(robot, 0.1));
 
   // A wrong pin is refused before any login.
   auto pinned = o;
@@ -531,4 +554,252 @@ TEST(QiLoopback, RepliesWithDynamicPayloadFlagAreAccepted) {
   EXPECT_EQ(a.signature(), "[f]");
   EXPECT_EQ(a.elements().size(), 2u);
   EXPECT_NO_THROW(session.call(motion, "stopMove", "()", {}));
+}
+
+// ---- Robot-side deadman (issue 23) ------------------------------------------------------------
+
+namespace {
+
+/// A second client, as an observer of the robot: what ALMotion reports as the base velocity.
+std::vector<double> robot_velocity(qi::QiSession& s, const qi::ServiceHandle& motion) {
+  std::vector<double> out;
+  const qi::Value v = s.call(motion, "getRobotVelocity", "()", {});
+  for (const auto& e : v.elements()) out.push_back(e.as_double());
+  return out;
+}
+
+bool velocity_is_zero(const std::vector<double>& v) {
+  return v.size() == 3 && v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0;
+}
+
+}  // namespace
+
+TEST(QiLoopback, EachMoveEndsByItselfOnTheRobotAfterTheHorizon) {
+  SyntheticPatternRobot robot;
+  qi::MockNaoqiServer server(robot);
+  server.start();
+  auto o = bridge_options(server);
+  // A horizon well above the 50 ms command period, so a loaded machine's late wake-ups do not
+  // open gaps; the app's own default is 250 ms at 66 ms per frame.
+  o.deadman_horizon = 500ms;
+  o.watchdog_timeout = 5000ms;  // keep the laptop-side watchdog out of the way
+  qi::QiBridge bridge(o);
+  bridge.connect();
+  ASSERT_TRUE(bridge.robot_side_deadman()) << bridge.robot_side_deadman_summary();
+  qi::QiSession observer;
+  observer.connect(server.url());
+  const auto motion = observer.service("ALMotion");
+
+  // Commands closer together than the horizon: the base drives without a gap.
+  for (int i = 0; i < 8; ++i) {
+    bridge.move({0.15, 0.0, 0.3});
+    std::this_thread::sleep_for(50ms);
+    const auto v = robot_velocity(observer, motion);
+    ASSERT_EQ(v.size(), 3u);
+    EXPECT_NEAR(v[0], 0.15, 1e-4);
+    EXPECT_NEAR(v[1], 0.0, 1e-4);
+    EXPECT_NEAR(v[2], 0.3, 1e-4);
+    EXPECT_TRUE(observer.call(motion, "moveIsActive", "()", {}).as_bool());
+  }
+  EXPECT_EQ(server.stats().bounded_moves_ended, 0u);
+  for (const auto& r : robot.command_log()) EXPECT_FALSE(r.stop_move);
+
+  // Then silence after one last command: the robot stops by itself at the horizon.
+  bridge.move({0.15, 0.0, 0.3});
+  const auto last = std::chrono::steady_clock::now();
+  ASSERT_TRUE(wait_until([&] { return velocity_is_zero(robot_velocity(observer, motion)); },
+                         3000ms));
+  const auto stopped_after = std::chrono::steady_clock::now() - last;
+  EXPECT_GE(stopped_after, 480ms);  // not before the horizon (it starts when the robot gets it)
+  EXPECT_LT(stopped_after, 2000ms);
+  EXPECT_EQ(server.stats().bounded_moves_ended, 1u);
+  EXPECT_TRUE(robot.command_log().back().stop_move);
+  EXPECT_FALSE(observer.call(motion, "moveIsActive", "()", {}).as_bool());
+  EXPECT_EQ(bridge.counters().bounded_move_errors, 0u) << bridge.last_move_error();
+}
+
+TEST(QiLoopback, PlainMoveKeepsDrivingAfterTheClientLeavesAsOnARealNaoqi) {
+  SyntheticPatternRobot robot;
+  qi::MockNaoqiServer server(robot);
+  server.start();
+  {
+    auto o = bridge_options(server);
+    o.deadman_horizon = 0ms;  // plain ALMotion.move
+    o.watchdog_timeout = 5000ms;
+    qi::QiBridge bridge(o);
+    bridge.connect();
+    EXPECT_FALSE(bridge.robot_side_deadman());
+    EXPECT_NE(bridge.robot_side_deadman_summary().find("leaves the base driving"),
+              std::string::npos);
+    bridge.move({0.15, 0.0, 0.0});
+    server.disconnect_all();
+    ASSERT_TRUE(wait_until([&] { return bridge.state() == nb::ConnectionState::kLost; }, 3000ms));
+  }
+  std::this_thread::sleep_for(300ms);
+  qi::QiSession observer;
+  observer.connect(server.url());
+  const auto motion = observer.service("ALMotion");
+  const auto v = robot_velocity(observer, motion);
+  ASSERT_EQ(v.size(), 3u);
+  EXPECT_NEAR(v[0], 0.15, 1e-6);  // the hazard the deadman exists for
+  EXPECT_EQ(server.stats().base_stops_on_disconnect, 0u);
+  observer.call(motion, "stopMove", "()", {});
+  EXPECT_TRUE(velocity_is_zero(robot_velocity(observer, motion)));
+}
+
+TEST(QiLoopback, NonFiniteVelocitiesAreRefusedByTheRobot) {
+  SyntheticPatternRobot robot;
+  qi::MockNaoqiServer server(robot);
+  server.start();
+  qi::QiSession s;
+  s.connect(server.url());
+  const auto motion = s.service("ALMotion");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(s.call(motion, "move", "(fff)",
+                      {qi::Value::float32(nan), qi::Value::float32(0.f), qi::Value::float32(0.f)}),
+               qi::RemoteCallError);
+  EXPECT_THROW(s.call(motion, "moveTo", "(ffff)",
+                      {qi::Value::float32(0.f), qi::Value::float32(inf), qi::Value::float32(0.f),
+                       qi::Value::float32(0.25f)}),
+               qi::RemoteCallError);
+  EXPECT_THROW(s.call(motion, "moveTo", "(ffff)",
+                      {qi::Value::float32(0.f), qi::Value::float32(0.f), qi::Value::float32(0.f),
+                       qi::Value::float32(0.f)}),
+               qi::RemoteCallError);
+  EXPECT_TRUE(robot.command_log().empty());
+  EXPECT_TRUE(velocity_is_zero(robot_velocity(s, motion)));
+}
+
+TEST(QiLoopback, CallLogHasOneJsonLinePerCallAndNeverTheToken) {
+  SyntheticPatternRobot robot;
+  const std::string log = ::testing::TempDir() + "/qi_call_log_" + std::to_string(getpid()) + ".jsonl";
+  std::remove(log.c_str());
+  qi::MockServerOptions so;
+  so.user = "nao";
+  so.password = "s3cret-token";
+  so.call_log_file = log;
+  qi::MockNaoqiServer server(robot, so);
+  server.start();
+  qi::SessionOptions sopt;
+  sopt.user = "nao";
+  sopt.password = "s3cret-token";
+  qi::QiSession s(sopt);
+  s.connect(server.url());
+  const auto motion = s.service("ALMotion");
+  s.call(motion, "move", "(fff)",
+         {qi::Value::float32(0.1f), qi::Value::float32(0.f), qi::Value::float32(0.5f)});
+  s.call(motion, "moveTo", "(ffff)",
+         {qi::Value::float32(0.f), qi::Value::float32(0.f), qi::Value::float32(0.f),
+          qi::Value::float32(0.05f)});
+  s.close();
+  server.stop();
+  std::ifstream in(log);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  std::string all;
+  for (const auto& l : lines) all += l + "\n";
+  EXPECT_EQ(all.find("s3cret-token"), std::string::npos) << all;
+  ASSERT_GE(lines.size(), 6u) << all;  // authenticate, 2 lookups, 2 metaObjects... and the moves
+  EXPECT_NE(lines.front().find("\"method\":\"authenticate\""), std::string::npos) << all;
+  EXPECT_NE(lines.front().find("\"auth_user\":\"nao\""), std::string::npos) << all;
+  EXPECT_NE(lines.front().find("<12 characters>"), std::string::npos) << all;
+  EXPECT_NE(all.find("\"service\":\"ALMotion\",\"method\":\"move\",\"args\":[0.100000001,0,0.5]"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("moveTo reached its pose"), std::string::npos) << all;
+  for (const auto& l : lines) EXPECT_EQ(l.rfind("{\"t_unix_s\":", 0), 0u) << l;
+}
+
+// ---- A mock that survives many and hostile connections (issue 23) -----------------------------
+
+namespace {
+
+std::size_t rss_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t pages_total = 0, pages_resident = 0;
+  statm >> pages_total >> pages_resident;
+  return pages_resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
+
+}  // namespace
+
+TEST(QiLoopback, ManyConnectionsAndSlowClientsNeitherGrowMemoryNorStarveAGoodClient) {
+  namespace asio = boost::asio;
+  using tcp = asio::ip::tcp;
+  SyntheticPatternRobot robot;
+  qi::MockServerOptions so;
+  so.handshake_timeout = 1500ms;
+  so.max_connections = 64;
+  qi::MockNaoqiServer server(robot, so);
+  server.start();
+  asio::io_context io;
+  const tcp::endpoint ep(asio::ip::make_address("127.0.0.1"), server.port());
+  // Connect and close; every 100th announces a 64 MiB message, sends 256 KiB of it and leaves
+  // (the server used to keep such a buffer). Half close with RST to spare the port range.
+  auto cycles = [&](int n) {
+    std::vector<std::uint8_t> chunk(256 * 1024, 0x5a);
+    for (int i = 0; i < n; ++i) {
+      tcp::socket s(io);
+      s.connect(ep);
+      if (i % 100 == 0) {
+        qi::MessageHeader h;
+        h.id = 1;
+        h.type = qi::MessageType::kCall;
+        h.service = 1;
+        h.object = 1;
+        h.action = 100;
+        h.size = 64u << 20;
+        const auto bytes = qi::encode_header(h);
+        asio::write(s, asio::buffer(bytes));
+        asio::write(s, asio::buffer(chunk));
+      }
+      if (i % 2 == 0) s.set_option(asio::socket_base::linger(true, 0));
+      s.close();
+    }
+    ASSERT_TRUE(wait_until([&] { return server.stats().connections_open == 0; }, 10000ms));
+  };
+  cycles(500);  // warm-up: allocator pools, first big buffers
+  const std::size_t before = rss_bytes();
+  cycles(10000);
+  const std::size_t after = rss_bytes();
+  std::cout << "[measured] RSS growth over 10000 connect/close cycles: "
+            << (static_cast<double>(after) - static_cast<double>(before)) / 1e6 << " MB\n";
+  EXPECT_LT(static_cast<double>(after) - static_cast<double>(before), 5e6);
+  // Connections reset before accept() took them are never accepted: at least the graceful half.
+  EXPECT_GE(server.stats().connections_accepted, 5250u);
+
+  // 50 slow clients: half a header each, then nothing.
+  std::vector<tcp::socket> slow;
+  for (int i = 0; i < 50; ++i) {
+    slow.emplace_back(io);
+    slow.back().connect(ep);
+    const std::uint8_t partial[10] = {0x42, 0xde, 0xad, 0x42, 1, 0, 0, 0, 0, 0};
+    asio::write(slow.back(), asio::buffer(partial));
+  }
+  ASSERT_TRUE(wait_until([&] { return server.stats().connections_open >= 50; }, 3000ms));
+  // A well-behaved client is served at once, beside them.
+  qi::QiSession good;
+  good.connect(server.url());
+  const auto motion = good.service("ALMotion");
+  EXPECT_TRUE(velocity_is_zero(robot_velocity(good, motion)));
+  // Beyond the limit, connections are refused on accept (the accept loop keeps going).
+  std::vector<tcp::socket> extra;
+  for (int i = 0; i < 20; ++i) {
+    extra.emplace_back(io);
+    extra.back().connect(ep);
+  }
+  ASSERT_TRUE(wait_until([&] { return server.stats().connections_refused >= 7; }, 3000ms))
+      << server.stats().connections_refused;
+  // The silent ones are closed by the handshake timeout; the good client keeps being served.
+  ASSERT_TRUE(wait_until([&] { return server.stats().connections_timed_out >= 63; }, 8000ms))
+      << server.stats().connections_timed_out;
+  for (auto& s : slow) {
+    std::uint8_t b = 0;
+    boost::system::error_code ec;
+    s.read_some(asio::buffer(&b, 1), ec);
+    EXPECT_TRUE(ec == asio::error::eof || ec == asio::error::connection_reset) << ec.message();
+  }
+  good.call(motion, "stopMove", "()", {});
+  EXPECT_TRUE(velocity_is_zero(robot_velocity(good, motion)));
 }

@@ -8,9 +8,13 @@
 // with its MetaObject. Backing: getImageRemote renders SimRobot::capture() at the subscribed
 // resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints;
 // getRobotPosition(useSensors) -> SimRobot::odometry (true: wheels, false: commands).
-// When a connection that commanded the base drops, the server stops the base (stop_move), so a
-// lost client never leaves the simulated robot driving. Errors follow libqi's texts (3.2); a
-// request the SimRobot refuses (sim::SimError) becomes an Error reply carrying its text.
+// moveTo(x, y, theta, time) drives the constant twist that reaches the pose in `time`, then
+// stops the base by itself and answers the Call (bounded_move.hpp), like NAOqi's blocking
+// time-constrained moveTo; any other motion command replaces it. Like a real NAOqi, the base
+// keeps its last velocity when the commanding connection drops (stop_base_on_disconnect turns
+// the old behaviour back on). getRobotVelocity and moveIsActive report what the base executes
+// (zero after every stop); non-finite velocities are refused with an Error reply. Errors follow
+// libqi's texts (3.2); a request the SimRobot refuses (sim::SimError) becomes an Error reply.
 //
 // tcp:// or tcps:// (TLS 1.2, certificate and key from files, or a self-signed EC certificate
 // generated at start-up). Port 0 picks an ephemeral port: read url() after start().
@@ -46,7 +50,13 @@ struct MockServerOptions {
   int drop_every_nth_frame = 0;  ///< 0 off; else every nth getImageRemote repeats the last image
   int disconnect_after_messages = 0;  ///< 0 off; else close each connection after n received
   int malformed_reply_every_nth = 0;  ///< 0 off; else every nth non-void reply is corrupted
-  bool stop_base_on_disconnect = true;
+  /// Stop the base when a connection that commanded it drops. Off by default, as on a real
+  /// NAOqi, which keeps executing the last ALMotion.move velocity after its client went away
+  /// (only a time-constrained moveTo ends by itself).
+  bool stop_base_on_disconnect = false;
+  /// Non-empty: append one JSON line per call received (service, method, arguments, time) and
+  /// per base event (a moveTo ending) to this file. Login tokens are logged by length only.
+  std::string call_log_file;
   /// Serve each subscriber at most at its subscribed fps, like a real camera (wall-clock paced).
   /// Off (default): every getImageRemote renders a new frame at once (lockstep, faster than real
   /// time, for tests and offline replay).
@@ -57,6 +67,13 @@ struct MockServerOptions {
   /// Answer method calls with the DynamicPayload flag (payload = one `m`), which clients must
   /// accept (PROTOCOL.md 1.3).
   bool dynamic_replies = false;
+  /// A connection must finish its TLS handshake and log in (authenticate) within this; 0 = off.
+  std::chrono::milliseconds handshake_timeout{5000};
+  /// A connection that sends nothing for this long is closed; 0 = off. Clients of a session
+  /// request frames continuously, so only abandoned or hostile connections reach it.
+  std::chrono::milliseconds idle_timeout{60000};
+  /// Connections (including TLS handshakes) served at once; more are closed on accept.
+  int max_connections = 64;
   CodecLimits limits;
 
   std::vector<std::string> validate() const;
@@ -100,6 +117,9 @@ class MockNaoqiServer {
     std::uint64_t auth_failures = 0;
     std::uint64_t protocol_errors = 0;
     std::uint64_t base_stops_on_disconnect = 0;
+    std::uint64_t bounded_moves_ended = 0;  ///< moveTo(x, y, theta, time) ran to its end
+    std::uint64_t connections_refused = 0;  ///< closed on accept: max_connections reached
+    std::uint64_t connections_timed_out = 0;  ///< closed by handshake_timeout / idle_timeout
   };
   Stats stats() const;
 

@@ -18,12 +18,19 @@
 // no getRobotPosition(b), the frame comes without odometry: counted, the reason kept in
 // odometry_problem(), never fatal.
 //
+// Robot-side deadman (docs/naoqi_bridge.md): a non-zero velocity is sent as the
+// time-constrained ALMotion.moveTo towards the pose it reaches in `deadman_horizon`
+// (bounded_move.hpp), so the robot stops by itself when the laptop stops talking; its Call is
+// answered only when the move ends, so move() does not wait for it (an Error answer is counted
+// and kept in last_move_error()). Zero velocities and stops use move(0,0,0) + stopMove. Robots
+// without moveTo(ffff) get plain move(fff) and only the laptop-side stops below.
+//
 // Safety (docs/naoqi_bridge.md): a watchdog thread stops the base (move(0,0,0) then stopMove)
 // when no fresh move() arrives within `watchdog_timeout` while moving, when frames stall while
 // moving, and any exception in a bridge call stops the base before it propagates. A lost
 // connection latches "needs operator": move() then refuses (BridgeError) until the operator
-// calls clear_fault() (after reconnect()); the robot side stops its base on disconnect (our mock
-// server does; a real NAOqi keeps the last velocity, which is why the watchdog exists).
+// calls clear_fault() (after reconnect()); a real NAOqi (and our mock server) keeps the last
+// plain move() velocity after a disconnect, which is why commands carry their own horizon.
 // stop() is callable from any thread at any time and never throws.
 //
 // Threading: as RobotBridge. One watchdog thread, started by connect() and joined by the
@@ -50,12 +57,20 @@ struct QiBridgeOptions {
   std::string user;                          ///< e.g. "nao" for NAOqi 2.9; empty: no login
   std::string password;                      ///< from a prompt, file or env; never logged
   std::string tls_pin_sha256;                ///< empty: accept the robot's self-signed cert
+  /// SessionOptions::verify_certificate (trust on first use); empty: no check beyond the pin.
+  std::function<void(const std::string& url, const std::string& sha256)> verify_certificate;
   std::chrono::milliseconds connect_timeout{5000};
   std::chrono::milliseconds call_timeout{3000};         ///< per remote call
   std::chrono::milliseconds stop_call_timeout{500};     ///< per call inside stop()
   std::chrono::milliseconds watchdog_timeout{300};      ///< stop if no move() for this long
   std::chrono::milliseconds frame_stall_timeout{1000};  ///< stop if moving and no frame this long
   std::chrono::milliseconds watchdog_period{20};        ///< watchdog check period
+  /// Robot-side deadman: each non-zero velocity goes out as ALMotion.moveTo(x, y, theta, time)
+  /// towards the pose it would reach in this time, so the robot stops by itself when no fresh
+  /// command follows (frozen or killed laptop, lost link). 0 = plain move(x, y, theta), which a
+  /// real NAOqi keeps executing until told otherwise. Used only when the robot's ALMotion has
+  /// moveTo(ffff) (robot_side_deadman() says whether it has).
+  std::chrono::milliseconds deadman_horizon{250};
   int reconnect_attempts = 5;                           ///< reconnect(): tries before giving up
   std::chrono::milliseconds reconnect_initial_backoff{250};  ///< doubles after each failure
   std::chrono::milliseconds reconnect_max_backoff{4000};
@@ -101,6 +116,11 @@ class QiBridge : public RobotBridge {
 
   /// Why the last frame came without odometry ("" when it had it, or before the first frame).
   std::string odometry_problem() const override;
+  /// True when connected to an ALMotion with moveTo(x, y, theta, time) and deadman_horizon > 0:
+  /// every velocity command then ends by itself on the robot after deadman_horizon.
+  bool robot_side_deadman() const;
+  /// One line for operators: which robot-side stop is in force and what it means.
+  std::string robot_side_deadman_summary() const;
 
   /// SHA-256 of the robot's TLS certificate (tcps), "" on tcp.
   std::string tls_fingerprint() const;
@@ -113,10 +133,13 @@ class QiBridge : public RobotBridge {
     std::uint64_t stops = 0;           ///< stop sequences sent
     std::uint64_t watchdog_stops = 0;  ///< of which triggered by the watchdog
     std::uint64_t frames_without_odometry = 0;  ///< frames returned with Frame::odom empty
+    std::uint64_t bounded_move_errors = 0;  ///< moveTo Calls the robot answered with an Error
   };
   Counters counters() const;
   /// Why the last automatic stop happened ("watchdog: ...", "frames stalled ..."), for logs.
   std::string last_stop_reason() const;
+  /// Text of the last Error the robot answered to a bounded move (moveTo), "" if none.
+  std::string last_move_error() const;
 
  private:
   void open_session();
@@ -130,6 +153,8 @@ class QiBridge : public RobotBridge {
   void latch_fault(const std::string& why);
   void stop_base(const std::string& why) noexcept;
   void watchdog_loop();
+  void send_bounded_move(const ServiceHandle& motion, const BaseVelocity& velocity);
+  void reap_bounded_move();
   bool connected() const { return state_.load() == ConnectionState::kConnected; }
 
   QiBridgeOptions options_;
@@ -154,7 +179,10 @@ class QiBridge : public RobotBridge {
   bool needs_operator_ = false;
   std::string fault_reason_;
   std::string last_stop_reason_;
+  std::string last_move_error_;
   Counters counters_;
+  bool bounded_moves_ = false;  // ALMotion has moveTo(ffff) and deadman_horizon > 0
+  PendingCall last_bounded_;    // the latest moveTo in flight (answered when it ends)
 
   std::mutex motion_send_mutex_;  // orders move/stop sends on the wire
   std::atomic<bool> moving_{false};

@@ -43,6 +43,11 @@ struct SessionOptions {
   std::string user;                                 ///< empty: no login keys sent (NAOqi 2.5)
   std::string password;                             ///< auth_token; never logged
   std::string tls_pin_sha256;  ///< empty: accept any certificate; else required fingerprint
+  /// tcps only: called with the URL and the certificate's SHA-256 fingerprint after the TLS
+  /// handshake (and the pin check) and before anything is sent, the login included. Throwing
+  /// (a TlsError naming what to do) closes the connection and fails connect() with it. Used for
+  /// trust on first use (pepper_app's known-robots file).
+  std::function<void(const std::string& url, const std::string& sha256)> verify_certificate;
   CodecLimits limits;          ///< applied to every received message
 
   std::vector<std::string> validate() const;
