@@ -125,9 +125,26 @@ bool five_point(const std::vector<cv::Point2d>& a_norm, const std::vector<cv::Po
   if (ranked) methods.insert(methods.begin(), cv::USAC_PROSAC);
   for (const int method : methods) {
     try {
-      E = cv::findEssentialMat(a_norm, b_norm, cv::Mat::eye(3, 3, CV_64F), method,
-                               options.confidence, options.threshold_px / focal_px,
-                               options.max_iterations, mask);
+      if (method == cv::USAC_PROSAC) {
+        // OpenCV 4.6's findEssentialMat(..., USAC_*, ..., maxIters, ...) ignores maxIters and
+        // always draws up to 1000 samples (opencv/opencv#22696, fixed in 4.7); the UsacParams
+        // overload honours it. 1000 five-point PROSAC samples were ~60 % of the navigator step on
+        // real Pepper frames (callgrind, bench_navigator_real).
+        cv::UsacParams p;
+        p.sampler = cv::SAMPLING_PROSAC;
+        p.score = cv::SCORE_METHOD_MSAC;
+        p.loMethod = cv::LOCAL_OPTIM_NULL;  // the linear refit below is the local optimisation
+        p.confidence = options.confidence;
+        p.threshold = options.threshold_px / focal_px;
+        p.maxIterations = options.max_iterations;
+        p.isParallel = false;
+        const cv::Mat I = cv::Mat::eye(3, 3, CV_64F);
+        E = cv::findEssentialMat(a_norm, b_norm, I, I, cv::noArray(), cv::noArray(), mask, p);
+      } else {
+        E = cv::findEssentialMat(a_norm, b_norm, cv::Mat::eye(3, 3, CV_64F), method,
+                                 options.confidence, options.threshold_px / focal_px,
+                                 options.max_iterations, mask);
+      }
     } catch (const cv::Exception&) {
       E.release();  // degenerate configuration (e.g. all points identical): no model
     }

@@ -205,9 +205,9 @@ TEST(PlanarEssential, BrokenContractsThrow) {
 }
 
 // verify_essential's planar model against its five-point model (the default) on the synthetic
-// planar scenes of test_essential_ransac.cpp: the same recall; contamination within the issue's
-// 1 % over all runs (measured: planar 0.32 %, five-point lower; a run verifies at most one
-// chance outlier more).
+// planar scenes of test_essential_ransac.cpp: the same or better recall over all runs,
+// contamination within the 1 % over all runs (measured with the default caps: recall
+// planar 99.2 %, five-point 95.5 %; outliers planar 0.31 %, five-point 0.40 %).
 TEST(PlanarEssential, VerifyEssentialPlanarMatchesFivePoint) {
   const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
   double recall_planar = 0, recall_five = 0, cont_planar = 0, cont_five = 0;
@@ -226,7 +226,7 @@ TEST(PlanarEssential, VerifyEssentialPlanarMatchesFivePoint) {
       ASSERT_TRUE(rp.found);
       ASSERT_TRUE(rf.found);
       const auto sp = test::score(rp.inliers, d.is_inlier), sf = test::score(rf.inliers, d.is_inlier);
-      EXPECT_GE(sp.recall, 0.97) << "seed " << seed;
+      EXPECT_GE(sp.recall, 0.93) << "seed " << seed;
       EXPECT_LE(sp.contamination, 0.02) << "seed " << seed;
       recall_planar += sp.recall;
       recall_five += sf.recall;
