@@ -31,7 +31,7 @@ namespace pepper::core::geometry {
 struct EssentialRansacOptions {
   double threshold_px = 1.0;   ///< Sampson distance threshold, px (OpenCV's point-to-epiline)
   double confidence = 0.999;   ///< RANSAC confidence, (0, 1)
-  int max_iterations = 300;    ///< RANSAC cap (five-point samples; planar: 2-point samples)
+  int max_iterations = 1000;   ///< RANSAC cap (five-point samples; planar: 2-point samples)
   int min_inliers = 8;         ///< below this, the result is "not found" (5..)
   bool planar = false;         ///< planar-motion 2-point model; false: general five-point
   double camera_pitch_rad = 0.0;  ///< planar model: camera pitch (> 0 looks down)
