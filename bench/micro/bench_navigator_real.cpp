@@ -34,6 +34,8 @@
 //   BM_RealNavigatorStepVga    the same grey frames upscaled to 640x480 (cv::resize, bilinear),
 //                              the map built from the upscaled images with pepper_top_vga()
 //                              (= the QVGA intrinsics scaled_to(640, 480)).
+//   BM_RealNavigatorStep{Qvga,Vga}Planar  the same with the planar 2-point essential model
+//                              (features.matcher.essential.planar, camera pitch 0.18 rad).
 // Counters: per-step CPU time of the thread (clock_gettime(CLOCK_THREAD_CPUTIME_ID): one-core
 // figures even on a shared machine) cpu_p50_ms, cpu_p90_ms, cpu_p99_ms, cpu_max_ms, and the
 // median over the steps that ended navigating (cpu_nav_p50_ms), over the Edge_01 frames
@@ -178,9 +180,10 @@ double quantile(const std::vector<double>& sorted, double q) {
   return sorted[static_cast<size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5)];
 }
 
-void step_sequence(benchmark::State& state, const Sequence& seq) {
+void step_sequence(benchmark::State& state, const Sequence& seq,
+                   const core::navigator::NavigatorOptions& options = {}) {
   using core::navigator::NavState;
-  core::navigator::Navigator nav(seq.map);  // default NavigatorOptions
+  core::navigator::Navigator nav(seq.map, options);
   size_t i = 0;
   int64_t t_ns = 0, index = 0;
   core::navigator::StageTimings sum;
@@ -271,6 +274,25 @@ BENCHMARK(BM_RealNavigatorStepQvga)->Unit(benchmark::kMillisecond)->Iterations(k
 
 void BM_RealNavigatorStepVga(benchmark::State& state) { step_sequence(state, vga_sequence()); }
 BENCHMARK(BM_RealNavigatorStepVga)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+
+// The planar-motion 2-point essential model (features.matcher.essential.planar) with this data's
+// camera pitch: 0.18 rad (looking down: the five-point translations between neighbouring Edge_01
+// key images point ~0.18 rad above the optical axis, and the corridor's vanishing point sits
+// ~55 px above the image centre at QVGA; a scan of the pitch verified the most points there).
+core::navigator::NavigatorOptions planar_options() {
+  core::navigator::NavigatorOptions o;
+  o.matcher.essential.planar = true;
+  o.matcher.essential.camera_pitch_rad = 0.18;
+  return o;
+}
+void BM_RealNavigatorStepQvgaPlanar(benchmark::State& state) {
+  step_sequence(state, qvga_sequence(), planar_options());
+}
+BENCHMARK(BM_RealNavigatorStepQvgaPlanar)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+void BM_RealNavigatorStepVgaPlanar(benchmark::State& state) {
+  step_sequence(state, vga_sequence(), planar_options());
+}
+BENCHMARK(BM_RealNavigatorStepVgaPlanar)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
 
 }  // namespace
 

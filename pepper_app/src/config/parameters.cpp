@@ -357,6 +357,19 @@ std::vector<Parameter> build_table() {
     row("features.matcher.essential.min_inliers",
         essential, &Essential::min_inliers, "", "[5, inf)",
         "fewer inliers: no essential matrix"),
+    row("features.matcher.essential.planar",
+        essential, &Essential::planar, "", "",
+        "planar-motion 2-point model instead of five-point (off: real Pepper key images also "
+        "pitch and roll by up to a few degrees; docs/perception.md)"),
+    row("features.matcher.essential.camera_pitch_rad",
+        essential, &Essential::camera_pitch_rad, "rad", "(-1, 1)",
+        "planar model: the camera's pitch to the floor (> 0 looks down)"),
+    row("features.matcher.essential.planar_threshold_factor",
+        essential, &Essential::planar_threshold_factor, "", "[1, 10]",
+        "planar model: its RANSAC threshold in multiples of threshold_px"),
+    row("features.matcher.essential.five_point_fallback",
+        essential, &Essential::five_point_fallback, "", "",
+        "planar model: run five-point when it finds no model"),
 
     // features.matcher.trifocal: PlanarTrifocalOptions (core/geometry/planar_trifocal.hpp)
     row("features.matcher.trifocal.threshold_px",
@@ -946,7 +959,7 @@ const std::vector<std::pair<std::string, std::string>>& section_docs() {
       {"features.klt", "Pyramidal KLT, shared by the key images' pyramids and the tracker."},
       {"features.matcher", "Matching and verification between images."},
       {"features.matcher.lines", "Line matching by descriptor and geometry."},
-      {"features.matcher.essential", "Five-point RANSAC verifying point matches."},
+      {"features.matcher.essential", "Essential-matrix RANSAC verifying point matches (five-point, or planar 2-point)."},
       {"features.matcher.trifocal", "Three-view RANSAC verifying line matches."},
       {"key_images", "Key-image selection while teaching (the epsilon rule)."},
       {"navigator", "Replay: controller, feature kinds, holds, arrival, switching guards."},

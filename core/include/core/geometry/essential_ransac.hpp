@@ -1,7 +1,15 @@
 #pragma once
-// Two-view point verification: five-point essential-matrix RANSAC (cv::findEssentialMat, Nister's
-// solver) on normalised image coordinates (METHOD.md "Features and verification": a point match
-// counts only if it passes five-point essential RANSAC).
+// Two-view point verification: essential-matrix RANSAC on normalised image coordinates
+// (METHOD.md "Features and verification": a point match counts only if it passes essential
+// RANSAC). Two models:
+//  - five-point (default): the general 5-DOF model (cv::findEssentialMat, Nister's solver).
+//  - planar (`planar = true`): the camera moves on the floor with a known pitch, 2 DOF; 2-point
+//    RANSAC of planar_essential.hpp at `planar_threshold_factor` x the threshold, then a general
+//    (8-point linear) refinement at the threshold. Not the default: between real Pepper key
+//    images (shared/data pepper_qut_tmap) the camera also pitches and rolls by 0.2-6 deg (the
+//    base sways), and the planar path (pitch 0.18 rad) verified 95 % of the five-point path's
+//    points between neighbouring key images and 83 % two apart (docs/perception.md). With
+//    `five_point_fallback` the five-point model runs when the planar one finds no support.
 //
 // Inputs: matched points in normalised coordinates of view a and view b (same length); the
 // threshold is given in pixels and converted with `focal_px` (threshold_norm = threshold_px /
@@ -23,8 +31,15 @@ namespace pepper::core::geometry {
 struct EssentialRansacOptions {
   double threshold_px = 1.0;   ///< Sampson distance threshold, px (OpenCV's point-to-epiline)
   double confidence = 0.999;   ///< RANSAC confidence, (0, 1)
-  int max_iterations = 1000;   ///< RANSAC cap
+  int max_iterations = 1000;   ///< RANSAC cap (five-point samples; planar: 2-point samples)
   int min_inliers = 8;         ///< below this, the result is "not found" (5..)
+  bool planar = false;         ///< planar-motion 2-point model; false: general five-point
+  double camera_pitch_rad = 0.0;  ///< planar model: camera pitch (> 0 looks down)
+  double planar_threshold_factor = 5.0;  ///< planar model's threshold: this x threshold_px (the
+                                         ///< base sways; a general refinement follows)
+  bool five_point_fallback = false;  ///< planar model found nothing: try the five-point model
+                                     ///< (off: on views that share no scene it only adds time
+                                     ///< and the 5-DOF model's chance fits)
   std::vector<std::string> validate() const;
 };
 
