@@ -248,6 +248,7 @@ void Navigator::reset() {
   tracker_.reset();
   odom_.reset();
   blind_m_ = blind_rad_ = 0.0;
+  odom_since_fix_m_ = 1e9;
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -561,6 +562,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       const OdometryPose in_next{fix->pose.x_m * vnhv_m_per_unit_,
                                  fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
       fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), kFixGain);
+      odom_since_fix_m_ = 0.0;
     }
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
@@ -718,7 +720,15 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
     // switch (after a (re)localisation the robot may be anywhere on it, so the turn still to do
     // is unknown).
     const bool unlocated = options_.controller == ControllerKind::kVnhv && vnhv_unlocated_;
-    if (omega && options_.turn_feedforward > 0.0 && unlocated && segment_from_switch_) {
+    if (omega && options_.controller == ControllerKind::kVnhv && odometry_steers()) {
+      // VNHV has no estimate on this segment but the image still has features (IBVS has a
+      // demand), and a vision fix is at most dead_reckoning_max_m of odometry behind: the same
+      // law on the odometry's deviation from the taught path steers instead of IBVS. (No
+      // usable feature at all: no demand, the transition table's dead reckoning.)
+      bool on_the_spot = false;
+      omega = odometry_demand(on_the_spot);
+      tel.odometry_steered = true;
+    } else if (omega && options_.turn_feedforward > 0.0 && unlocated && segment_from_switch_) {
       omega = apply_taught_turn(*omega, tel);
     }
   }
@@ -816,6 +826,8 @@ void Navigator::follow_odometry(const Frame& frame) {
     blind_m_ += std::hypot(d.x_m, d.y_m);
     blind_rad_ += std::abs(d.yaw_rad);
   }
+  if (odom_) odom_since_fix_m_ += std::hypot(between(*odom_, *frame.odom).x_m,
+                                            between(*odom_, *frame.odom).y_m);
   tracker_.predict(*frame.odom);
   odom_ = frame.odom;
 }
@@ -825,11 +837,11 @@ bool Navigator::can_dead_reckon() const {
          blind_m_ < options_.dead_reckoning_max_m && blind_rad_ < options_.dead_reckoning_max_rad;
 }
 
-Command Navigator::dead_reckon(int64_t t_ns, Telemetry& tel) {
+double Navigator::odometry_demand(bool& on_the_spot) {
   const PathDeviation d = *tracker_.deviation();
   const double max_omega = options_.schedule.max_omega_rad_s;
   double demand = 0.0;
-  bool on_the_spot = d.in_place;
+  on_the_spot = d.in_place;
   if (d.in_place) {
     demand = kTurnGain_1_s * d.remaining_turn_rad;
   } else if (std::abs(d.heading_rad) > kTurnFirstRad) {
@@ -842,7 +854,17 @@ Command Navigator::dead_reckon(int64_t t_ns, Telemetry& tel) {
                                        d.curvature_1_m);
     demand = w ? *w : -kTurnGain_1_s * d.heading_rad;
   }
-  demand = std::clamp(demand, -max_omega, max_omega);
+  return std::clamp(demand, -max_omega, max_omega);
+}
+
+bool Navigator::odometry_steers() const {
+  return odom_ && tracker_.usable() && tracker_.estimate() && switcher_ &&
+         odom_since_fix_m_ < options_.dead_reckoning_max_m;
+}
+
+Command Navigator::dead_reckon(int64_t t_ns, Telemetry& tel) {
+  bool on_the_spot = false;
+  const double demand = odometry_demand(on_the_spot);
   tel.omega_demand_rad_s = demand;
   const control::BaseCommand b = schedule_.step(demand, t_ns);
   Command cmd;

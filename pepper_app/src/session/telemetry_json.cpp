@@ -62,6 +62,7 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"dead_reckoned_m", num(t.dead_reckoned_m)},
       {"dead_reckoned_rad", num(t.dead_reckoned_rad)},
       {"reacquired", t.reacquired},
+      {"odometry_steered", t.odometry_steered},
       {"drift_corrected_m", num(t.drift_corrected_m)},
       {"drift_corrected_rad", num(t.drift_corrected_rad)},
       {"localization_ran", t.localization_ran},

@@ -279,6 +279,11 @@ class Navigator {
   /// The dead-reckoning command: the VNHV path-following law on the odometry's deviation from
   /// the taught path (a turn on the spot: turn to the taught heading).
   Command dead_reckon(int64_t t_ns, Telemetry& tel);
+  /// The VNHV law on the odometry's deviation from the taught path (a turn on the spot, or
+  /// facing well off it: turn towards the taught heading; on_the_spot says so).
+  double odometry_demand(bool& on_the_spot);
+  /// Whether odometry may steer where VNHV has no estimate: a vision fix is recent enough.
+  bool odometry_steers() const;
   /// Whether dead reckoning can drive this frame (StepFacts::can_dead_reckon).
   bool can_dead_reckon() const;
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
@@ -328,6 +333,8 @@ class Navigator {
   TaughtPathTracker tracker_;
   std::optional<OdometryPose> odom_;
   double blind_m_ = 0.0, blind_rad_ = 0.0;
+  /// Odometry distance since the last vision fix of the estimate (VNHV located the robot).
+  double odom_since_fix_m_ = 1e9;
   std::optional<std::pair<double, double>> fix_correction_;
 };
 

@@ -89,6 +89,8 @@ struct Telemetry {
   /// (rad) driven on odometry alone since vision was last usable.
   double dead_reckoned_m = kNaN, dead_reckoned_rad = kNaN;
   bool reacquired = false;  ///< vision drives again on this frame after dead reckoning
+  /// VNHV had no estimate and the odometry's deviation from the taught path steered instead.
+  bool odometry_steered = false;
   /// On that frame, how far the first vision fix moved the odometry estimate: the drift
   /// corrected at re-acquisition, m and rad (NaN: no fix on that frame).
   double drift_corrected_m = kNaN, drift_corrected_rad = kNaN;
