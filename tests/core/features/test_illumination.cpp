@@ -18,34 +18,15 @@
 
 #include "core/features/image_features.hpp"
 #include "core/features/matching.hpp"
+#include "core/features/real_image_data.hpp"
 
 namespace pepper::core::features {
 namespace {
 
-const std::string kPepper = std::string(PEPPER_SHARED_DIR) + "/data/pepper_qut_tmap/Edge_01/";
-const std::string kVispCube = "/usr/share/visp-images-data/ViSP-images/mbt/cube/";
-
-CameraIntrinsics pepper_qvga() {
-  CameraIntrinsics k;  // shared/data/README.md
-  k.width_px = 320;
-  k.height_px = 240;
-  k.fx_px = 298.13;
-  k.fy_px = 298.72;
-  k.cx_px = 159.15;
-  k.cy_px = 118.91;
-  return k;
-}
-
-CameraIntrinsics cube_camera() {
-  CameraIntrinsics k;  // ViSP-images/mbt/cube.xml
-  k.width_px = 640;
-  k.height_px = 480;
-  k.fx_px = 547.7367575;
-  k.fy_px = 542.0744058;
-  k.cx_px = 338.7036994;
-  k.cy_px = 234.5083345;
-  return k;
-}
+const std::string kPepper = test_data::kPepper + "Edge_01/";
+using test_data::cube_camera;
+using test_data::kVispCube;
+using test_data::pepper_qvga;
 
 enum class Light { kSame, kDark, kBright, kGradient };
 const char* name(Light l) {

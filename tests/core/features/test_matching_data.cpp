@@ -10,25 +10,14 @@
 
 #include "core/features/image_features.hpp"
 #include "core/features/matching.hpp"
+#include "core/features/real_image_data.hpp"
 
 namespace pepper::core::features {
 namespace {
 
-const std::string kVispCube = "/usr/share/visp-images-data/ViSP-images/mbt/cube/";
-const std::string kPepper = std::string(PEPPER_SHARED_DIR) + "/data/pepper_qut_tmap/";
-
-// Intrinsics of the mbt/cube sequence (ViSP-images/mbt/cube.xml: px 547.74, py 542.07,
-// u0 338.70, v0 234.51).
-CameraIntrinsics cube_camera() {
-  CameraIntrinsics k;
-  k.width_px = 640;
-  k.height_px = 480;
-  k.fx_px = 547.7367575;
-  k.fy_px = 542.0744058;
-  k.cx_px = 338.7036994;
-  k.cy_px = 234.5083345;
-  return k;
-}
+using test_data::cube_camera;
+using test_data::kPepper;
+using test_data::kVispCube;
 
 ImageFeatures load(const FeatureExtractor& ex, const std::string& path) {
   const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
