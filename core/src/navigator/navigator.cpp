@@ -249,6 +249,7 @@ void Navigator::reset() {
   odom_.reset();
   blind_m_ = blind_rad_ = 0.0;
   odom_since_fix_m_ = 1e9;
+  drift_report_pending_ = false;
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -563,6 +564,12 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
                                  fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
       fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), kFixGain);
       odom_since_fix_m_ = 0.0;
+      if (drift_report_pending_) {
+        // The first fix after a blind stretch: how far the odometry had drifted.
+        tel.drift_corrected_m = fix_correction_->first;
+        tel.drift_corrected_rad = fix_correction_->second;
+        drift_report_pending_ = false;
+      }
     }
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
@@ -783,16 +790,14 @@ Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double>
         tel.reacquired = true;
         tel.dead_reckoned_m = blind_m_;
         tel.dead_reckoned_rad = blind_rad_;
-        if (fix_correction_) {
-          tel.drift_corrected_m = fix_correction_->first;
-          tel.drift_corrected_rad = fix_correction_->second;
-        }
+        drift_report_pending_ = true;
       }
       blind_m_ = blind_rad_ = 0.0;
       return cmd;
     }
     case Action::kDeadReckon:
       if (before != NavState::kDeadReckoning) blind_m_ = blind_rad_ = 0.0;
+      drift_report_pending_ = false;
       return dead_reckon(t_ns, tel);
     case Action::kHold:
       tel.hold_elapsed_ns = t_ns - last_good_t_ns_;

@@ -249,8 +249,11 @@ class GroundTruthMonitor final : public ReplayMonitor {
       const nav::Telemetry& tel = step->telemetry;
       run_.dead_reckoning_frames += tel.state == nav::NavState::kDeadReckoning;
       if (tel.reacquired) {
-        run_.reacquisitions.push_back({tel.dead_reckoned_m, tel.dead_reckoned_rad,
-                                       tel.drift_corrected_m, tel.drift_corrected_rad});
+        run_.reacquisitions.push_back({tel.dead_reckoned_m, tel.dead_reckoned_rad, kNaN, kNaN});
+      }
+      if (std::isfinite(tel.drift_corrected_m) && !run_.reacquisitions.empty()) {
+        run_.reacquisitions.back().corrected_m = tel.drift_corrected_m;
+        run_.reacquisitions.back().corrected_rad = tel.drift_corrected_rad;
       }
     } else if (!run_.samples.empty()) {
       // Dropped frame: the base keeps the command in force.

@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <set>
 #include <string>
@@ -137,12 +138,13 @@ struct RunResult {
   int frames_dropped = 0;
   int lost_frames = 0;         ///< frames with a stop command after the first localisation
   /// Stretches driven on odometry alone (navigator dead reckoning, issue 29): frames, and per
-  /// re-acquisition the distance and turn driven blind and the drift the first vision fix
-  /// corrected (NaN: no fix on that frame).
+  /// re-acquisition the distance and turn driven blind and the drift the first VNHV fix after
+  /// it corrected (NaN: no fix before the next blind stretch).
   int dead_reckoning_frames = 0;
   struct Reacquisition {
     double blind_m = 0.0, blind_rad = 0.0;
-    double corrected_m = 0.0, corrected_rad = 0.0;
+    double corrected_m = std::numeric_limits<double>::quiet_NaN();
+    double corrected_rad = std::numeric_limits<double>::quiet_NaN();
   };
   std::vector<Reacquisition> reacquisitions;
   double sim_s = 0.0;

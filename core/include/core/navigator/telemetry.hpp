@@ -91,8 +91,8 @@ struct Telemetry {
   bool reacquired = false;  ///< vision drives again on this frame after dead reckoning
   /// VNHV had no estimate and the odometry's deviation from the taught path steered instead.
   bool odometry_steered = false;
-  /// On that frame, how far the first vision fix moved the odometry estimate: the drift
-  /// corrected at re-acquisition, m and rad (NaN: no fix on that frame).
+  /// On the first frame after a blind stretch with a VNHV fix: how far that fix moved the
+  /// odometry estimate, the drift corrected at re-acquisition, m and rad (else NaN).
   double drift_corrected_m = kNaN, drift_corrected_rad = kNaN;
   // Localisation.
   bool localization_ran = false;
