@@ -826,13 +826,15 @@ void Navigator::follow_odometry(const Frame& frame) {
     odom_.reset();
     return;
   }
-  if (state_ == NavState::kDeadReckoning && odom_) {
+  if (odom_) {
     const OdometryPose d = between(*odom_, *frame.odom);
-    blind_m_ += std::hypot(d.x_m, d.y_m);
-    blind_rad_ += std::abs(d.yaw_rad);
+    const double moved_m = std::hypot(d.x_m, d.y_m);
+    odom_since_fix_m_ += moved_m;
+    if (state_ == NavState::kDeadReckoning) {
+      blind_m_ += moved_m;
+      blind_rad_ += std::abs(d.yaw_rad);
+    }
   }
-  if (odom_) odom_since_fix_m_ += std::hypot(between(*odom_, *frame.odom).x_m,
-                                            between(*odom_, *frame.odom).y_m);
   tracker_.predict(*frame.odom);
   odom_ = frame.odom;
 }
