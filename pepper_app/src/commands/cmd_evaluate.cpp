@@ -215,7 +215,8 @@ void register_evaluate_command(CLI::App& app) {
                   "Start perturbation along the tour, +- metres (< 0: the world's range)")
       ->capture_default_str();
   cmd->add_option("--light-factor", args->light_factor,
-                  "light disturbance: every light x this (0: the world's replay lighting)")
+                  "light disturbance: every light x this, for every run (0: x0.6 to x1.4, evenly "
+                  "spread over the runs); the world's own window change stays on top")
       ->capture_default_str();
   cmd->add_option("--drop-probability", args->drop_probability, "drops disturbance: p(frame lost)")
       ->capture_default_str();

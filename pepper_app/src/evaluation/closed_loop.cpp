@@ -491,7 +491,7 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
   ev.taught_length_m = teach.length_m;
   ev.teach_frames = teach.frames;
   const DisturbedWorld dw = make_disturbed_world(world, options.disturbances, options.disturbance,
-                                                 teach.path_m, options.seed);
+                                                 teach.path_m, options.seed, options.starts);
   ev.disturbance_notes = dw.notes;
   if (progress) {
     for (const auto& n : dw.notes) progress("  disturbance: " + n);
@@ -503,13 +503,16 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
       continue;
     }
     const sim::Pose2D start = replay_start_pose(*world, k, options);
-    RunResult r = replay_run(teach, dw.world, dw.lighting, start, k, options);
+    RunResult r = replay_run(teach, dw.world, dw.lighting_of_run(k), start, k, options);
+    r.light_factor = dw.light_factor_of_run(k);
     if (progress) {
       std::ostringstream os;
       os << "[" << ev.features << "] start " << (k + 1) << "/" << options.starts << " ("
          << fmt("%.2f", start.x_m) << ", " << fmt("%.2f", start.y_m) << ", "
          << fmt("%.1f", start.yaw_rad / kDeg) << " deg; lateral "
-         << fmt("%+.2f", r.start_lateral_m) << " m): " << r.outcome;
+         << fmt("%+.2f", r.start_lateral_m) << " m";
+      if (r.light_factor != 0.0) os << "; light x" << fmt("%.2f", r.light_factor);
+      os << "): " << r.outcome;
       if (!r.detail.empty()) os << " (" << r.detail << ")";
       os << ", " << fmt("%.1f", r.travelled_m) << " m, converged from "
          << fmt("%.1f", r.converged_from_m) << " m, lateral rms "

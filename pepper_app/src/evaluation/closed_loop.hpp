@@ -122,6 +122,7 @@ struct RunResult {
   int index = 0;
   double start_x_m = 0.0, start_y_m = 0.0, start_yaw_rad = 0.0;
   double start_lateral_m = 0.0;  ///< of the start, from the taught path
+  double light_factor = 0.0;     ///< light disturbance of this run (0: none)
   bool success = false;
   std::string outcome;        ///< complete, collision, lost, diverged, timeout, wrong_end
   std::string detail;         ///< e.g. what was hit

@@ -213,6 +213,8 @@ std::vector<std::string> DisturbanceOptions::validate() const {
     }
   };
   if (light_factor != 0.0) range("light_factor", light_factor, 0.2, 3.0);
+  range("light_factor_min", light_factor_min, 0.2, 3.0);
+  range("light_factor_max", light_factor_max, light_factor_min, 3.0);
   range("furniture_shift_m", furniture_shift_m, 0.0, 2.0);
   range("furniture_yaw_deg", furniture_yaw_deg, 0.0, 90.0);
   range("min_path_clearance_m", min_path_clearance_m, 0.0, 2.0);
@@ -223,11 +225,42 @@ std::vector<std::string> DisturbanceOptions::validate() const {
   return e;
 }
 
+const std::string& DisturbedWorld::lighting_of_run(int k) const {
+  if (k >= 0 && static_cast<size_t>(k) < run_lighting.size()) return run_lighting[k];
+  return lighting;
+}
+
+double DisturbedWorld::light_factor_of_run(int k) const {
+  if (k >= 0 && static_cast<size_t>(k) < run_light_factors.size()) return run_light_factors[k];
+  return light_factor;
+}
+
+namespace {
+
+/// The world's declared window change between teach and replay (sun, blinds), 1 if none.
+double window_change(const sim::World& world) {
+  const sim::LightingCondition& teach = world.light("teach");
+  const auto replay = world.lighting.find("replay");
+  return replay != world.lighting.end() && teach.windows > 0.0
+             ? replay->second.windows / teach.windows
+             : 1.0;
+}
+
+}  // namespace
+
+sim::LightingCondition scaled_lighting(const sim::World& world, double factor) {
+  sim::LightingCondition l = world.light("teach");
+  l.ambient *= factor;
+  l.lamps *= factor;
+  l.windows *= factor * window_change(world);
+  return l;
+}
+
 DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& world,
                                     const std::set<Disturbance>& disturbances,
                                     const DisturbanceOptions& options,
                                     const std::vector<Eigen::Vector2d>& taught_path_m,
-                                    uint64_t seed) {
+                                    uint64_t seed, int runs) {
   if (const auto errors = options.validate(); !errors.empty()) {
     throw std::invalid_argument(errors.front());
   }
@@ -256,26 +289,32 @@ DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& wor
     out.world = std::make_shared<const sim::World>(std::move(w));
   }
   if (disturbances.count(Disturbance::kLight)) {
-    if (options.light_factor == 0.0) {
-      out.lighting = "replay";
-      const auto& l = out.world->light("replay");
-      std::ostringstream os;
-      os << "world's replay lighting: ambient x" << l.ambient << ", windows x" << l.windows
-         << ", lamps x" << l.lamps;
-      out.notes.push_back(os.str());
-    } else {
-      auto w = std::make_shared<sim::World>(*out.world);
-      sim::LightingCondition l = w->light("teach");
-      l.ambient *= options.light_factor;
-      l.windows *= options.light_factor;
-      l.lamps *= options.light_factor;
-      w->lighting["evaluation"] = l;
-      out.world = w;
+    auto w = std::make_shared<sim::World>(*out.world);
+    const double windows = window_change(*world);
+    std::ostringstream os;
+    if (options.light_factor != 0.0) {
+      w->lighting["evaluation"] = scaled_lighting(*world, options.light_factor);
       out.lighting = "evaluation";
-      std::ostringstream os;
+      out.light_factor = options.light_factor;
       os << "every light x" << options.light_factor;
-      out.notes.push_back(os.str());
+    } else {
+      const int n = std::max(runs, 1);
+      for (int k = 0; k < n; ++k) {
+        const double f = n == 1 ? options.light_factor_min
+                                : options.light_factor_min +
+                                      (options.light_factor_max - options.light_factor_min) * k /
+                                          (n - 1);
+        const std::string name = "evaluation_run_" + std::to_string(k + 1);
+        w->lighting[name] = scaled_lighting(*world, f);
+        out.run_lighting.push_back(name);
+        out.run_light_factors.push_back(f);
+      }
+      os << "every light x" << options.light_factor_min << " to x" << options.light_factor_max
+         << " over the " << n << " run(s), evenly spaced";
     }
+    if (windows != 1.0) os << ", the world's window change x" << windows << " on top";
+    out.notes.push_back(os.str());
+    out.world = w;
   }
   if (disturbances.count(Disturbance::kDrops)) {
     std::ostringstream os;

@@ -33,9 +33,14 @@ Disturbance parse_disturbance(const std::string& name);
 std::string disturbance_label(const std::set<Disturbance>& disturbances);
 
 struct DisturbanceOptions {
-  /// Light: 0 uses the world's "replay" lighting condition; otherwise every light group of the
-  /// "teach" condition is multiplied by this factor, in [0.2, 3] (targets: 0.6 .. 1.4).
+  /// Light: every light group of the "teach" condition is multiplied by a factor, and the
+  /// windows also by the world's own replay change (replay.windows / teach.windows). 0: the
+  /// factor spans [light_factor_min, light_factor_max] over the runs (run k of N:
+  /// min + (max - min) k / (N - 1); one run: min), so every evaluation covers the range the
+  /// targets name (x0.6 to x1.4); otherwise this one factor for every run, in [0.2, 3].
   double light_factor = 0.0;
+  double light_factor_min = 0.6;
+  double light_factor_max = 1.4;
   /// Furniture: each box and table moves by a seeded random vector of length in
   /// [0.5, 1] x furniture_shift_m and turns by up to +-furniture_yaw_deg. >= 0.
   double furniture_shift_m = 0.25;
@@ -60,15 +65,28 @@ struct DisturbanceOptions {
 struct DisturbedWorld {
   std::shared_ptr<const sim::World> world;
   std::string lighting = "teach";  ///< condition the replay robot must use
+  /// Light range: one condition (and its factor) per run, overriding `lighting`.
+  std::vector<std::string> run_lighting;
+  std::vector<double> run_light_factors;
   std::vector<std::string> notes;  ///< one line per change ("moved table_1 by 0.21 m", ...)
+
+  /// The lighting condition of run k (0-based).
+  const std::string& lighting_of_run(int k) const;
+  /// The light factor of run k: 0 without a light disturbance.
+  double light_factor_of_run(int k) const;
+  double light_factor = 0.0;  ///< fixed factor (or 0)
 };
+
+/// The teach lighting times `factor`, with the world's own replay window change on top.
+sim::LightingCondition scaled_lighting(const sim::World& world, double factor);
 
 /// The world the replay sees. `taught_path_m` is the path to keep clear (ground truth of the
 /// teach drive, or the waypoints). Only kLight, kFurniture and kPerson change the world.
+/// `runs`: how many replay runs share it (the light range is spread over them).
 DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& world,
                                     const std::set<Disturbance>& disturbances,
                                     const DisturbanceOptions& options,
                                     const std::vector<Eigen::Vector2d>& taught_path_m,
-                                    uint64_t seed);
+                                    uint64_t seed, int runs = 1);
 
 }  // namespace pepper::app::evaluation

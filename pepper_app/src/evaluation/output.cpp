@@ -51,6 +51,7 @@ json run_json(const RunResult& r) {
   return {{"index", r.index},
           {"start", {{"x_m", r.start_x_m}, {"y_m", r.start_y_m}, {"yaw_rad", r.start_yaw_rad},
                      {"lateral_m", num(r.start_lateral_m)}}},
+          {"light_factor", r.light_factor},
           {"success", r.success},
           {"outcome", r.outcome},
           {"detail", r.detail},
@@ -142,6 +143,7 @@ std::string runs_table(const Evaluation& e) {
        << pad(fmt("%.1f", 100 * r.lateral_rms_m), 11) << pad(fmt("%.1f", 100 * r.lateral_max_m), 11)
        << pad(fmt("%.1f", 100 * r.final_error_m), 11) << pad(fmt("%.2f", r.omega_rate_rms_rad_s2), 8)
        << pad(fmt("%.1f", r.step_ms_median), 9) << pad(fmt("%.1f", r.step_ms_p95), 6);
+    if (r.light_factor != 0.0) os << " light x" << fmt("%.2f", r.light_factor);
     if (!r.detail.empty()) os << " " << r.detail;
     os << "\n";
   }

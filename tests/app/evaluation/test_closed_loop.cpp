@@ -157,6 +157,30 @@ TEST(Disturbances, MovedFurnitureKeepsTheTaughtPathClear) {
   }
 }
 
+TEST(Disturbances, DefaultLightSpansTheTargetRangeOverTheRunsWithTheWorldsWindowChange) {
+  const auto& w = small_room();
+  const DisturbedWorld d =
+      make_disturbed_world(w, {Disturbance::kLight}, {}, w->scenario.waypoints_m, 1, 5);
+  ASSERT_EQ(d.run_light_factors.size(), 5u);
+  const double expected[] = {0.6, 0.8, 1.0, 1.2, 1.4};
+  const sim::LightingCondition& teach = w->light("teach");
+  const double windows_change = w->light("replay").windows / teach.windows;
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_NEAR(d.light_factor_of_run(k), expected[k], 1e-12) << "run " << k;
+    const sim::LightingCondition& l = d.world->light(d.lighting_of_run(k));
+    EXPECT_NEAR(l.ambient, expected[k] * teach.ambient, 1e-12);
+    EXPECT_NEAR(l.lamps, expected[k] * teach.lamps, 1e-12);
+    EXPECT_NEAR(l.windows, expected[k] * teach.windows * windows_change, 1e-12);
+  }
+  // One run takes the dark end; no light disturbance: factor 0 and the teach lighting.
+  const DisturbedWorld one =
+      make_disturbed_world(w, {Disturbance::kLight}, {}, w->scenario.waypoints_m, 1, 1);
+  EXPECT_NEAR(one.light_factor_of_run(0), 0.6, 1e-12);
+  const DisturbedWorld none = make_disturbed_world(w, {}, {}, w->scenario.waypoints_m, 1, 5);
+  EXPECT_EQ(none.light_factor_of_run(3), 0.0);
+  EXPECT_EQ(none.lighting_of_run(3), "teach");
+}
+
 TEST(Disturbances, PersonWalksBesideThePathAndLightScales) {
   const auto& w = small_room();
   DisturbanceOptions o;
