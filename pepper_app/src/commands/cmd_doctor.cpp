@@ -312,6 +312,20 @@ const std::vector<const char*> kStateChecks = {"naoqi version", "battery",
                                                "autonomous life", "collision protection",
                                                "odometry"};
 
+/// The last line (verdict of the whole run) and the exit code: 0 when nothing failed.
+int summarize(const Report& report) {
+  const std::string warned =
+      report.warnings() == 0 ? ""
+                             : std::to_string(report.warnings()) + " warning(s): see the WARN lines";
+  if (report.failures() == 0) {
+    std::cout << "all checks passed" << (warned.empty() ? "" : ", " + warned) << "\n";
+  } else {
+    std::cout << report.failures() << " check(s) failed: fix the FAIL lines before driving"
+              << (warned.empty() ? "" : "; " + warned) << "\n";
+  }
+  return report.failures() == 0 ? 0 : 1;
+}
+
 int run_doctor(const DoctorArgs& a) {
   Report report;
   qi::QiBridgeOptions o;
@@ -390,7 +404,7 @@ int run_doctor(const DoctorArgs& a) {
     for (const auto& s : services) report.fail(std::string("service ") + s.name, skipped);
     for (const char* c : kStateChecks) report.fail(c, skipped);
     for (const char* c : {"camera", "head lock", "base"}) report.fail(c, skipped);
-    return 1;
+    return summarize(report);
   }
   for (const auto& s : services) {
     const std::string check = std::string("service ") + s.name;
@@ -437,7 +451,7 @@ int run_doctor(const DoctorArgs& a) {
     bridge.connect();
   } catch (const std::exception& e) {
     for (const char* c : {"camera", "head lock", "base"}) report.fail(c, classify(e));
-    return 1;
+    return summarize(report);
   }
   try {
     nb::CameraRequest req;  // VGA grey, 15 fps
@@ -526,16 +540,7 @@ int run_doctor(const DoctorArgs& a) {
   }
   bridge.stop();
   bridge.release();
-  const std::string warned =
-      report.warnings() == 0 ? ""
-                             : std::to_string(report.warnings()) + " warning(s): see the WARN lines";
-  if (report.failures() == 0) {
-    std::cout << "all checks passed" << (warned.empty() ? "" : ", " + warned) << "\n";
-  } else {
-    std::cout << report.failures() << " check(s) failed: fix the FAIL lines before driving"
-              << (warned.empty() ? "" : "; " + warned) << "\n";
-  }
-  return report.failures() == 0 ? 0 : 1;
+  return summarize(report);
 }
 
 }  // namespace
