@@ -1,7 +1,9 @@
 // `pepper_app doctor` against `pepper_app mock-robot` over real sockets on 127.0.0.1 (issue 30
 // item 7): the mock robot is asleep, on low battery and in Autonomous Life, and doctor says so,
 // says what to do and exits 1; a ready robot passes; a robot without some services gets warnings
-// naming them, not a crash. Both programs run as subprocesses, as an operator runs them.
+// naming them, not a crash. Both programs run as subprocesses, as an operator runs them. The
+// mock's simulation options also drive a replay's supervision end to end: a move failure is
+// printed as a robot_warning event, a head Autonomous Life keeps ends the replay.
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -212,6 +214,67 @@ TEST(DoctorE2E, MissingServicesGiveWarningsNamingThem) {
   EXPECT_EQ(no_motion.code, 1) << no_motion.all;
   EXPECT_EQ(line_of(no_motion.out, "service ALMotion").rfind("FAIL", 0), 0u) << no_motion.out;
   EXPECT_TRUE(has(no_motion.out, "check(s) failed")) << no_motion.all;
+}
+
+namespace {
+
+const std::string kWorldFile = std::string(PEPPER_SOURCE_DIR) + "/worlds/robotics_room.yaml";
+const std::vector<std::string> kQvga = {"--set", "robot.camera_width_px=320", "--set",
+                                        "robot.camera_height_px=240"};
+
+std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+}  // namespace
+
+TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
+  const fs::path dir = fresh_dir("supervision");
+  Proc teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+                  "--max-distance", "2.0"},
+                 kQvga),
+             dir, "teach");
+  ASSERT_EQ(teach.wait(std::chrono::seconds(120)), 0) << teach.both();
+
+  // 1. The robot stops executing moves 4 s after start-up (an obstacle): warned, not stopped.
+  {
+    Proc mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile,
+               "--fail-moves", "Safety: obstacle (e2e)", "--fail-moves-after-s", "4"},
+              dir, "mock_fail");
+    const std::string url = start_mock(mock);
+    ASSERT_FALSE(url.empty()) << mock.both();
+    Proc replay(cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
+                     "150"},
+                    kQvga),
+                dir, "replay_fail");
+    replay.wait(std::chrono::seconds(90));
+    const std::string out = replay.out();
+    EXPECT_TRUE(has(out, "\"event\":\"robot_warning\"")) << replay.both();
+    EXPECT_TRUE(has(out, "move failed")) << replay.both();
+    EXPECT_TRUE(has(out, "Safety: obstacle (e2e)")) << replay.both();
+    mock.signal(SIGINT);
+    mock.wait(std::chrono::seconds(10));
+  }
+  // 2. Autonomous Life takes the head 4 s after start-up and cannot be turned off: the replay
+  // ends with head_lock_lost (exit code 1) and says what to do.
+  {
+    Proc mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile,
+               "--take-head-after-s", "4", "--take-head-sticky"},
+              dir, "mock_head");
+    const std::string url = start_mock(mock);
+    ASSERT_FALSE(url.empty()) << mock.both();
+    Proc replay(cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
+                     "600"},
+                    kQvga),
+                dir, "replay_head");
+    EXPECT_EQ(replay.wait(std::chrono::seconds(90)), 1) << replay.both();
+    const std::string all = replay.both();
+    EXPECT_TRUE(has(all, "head_lock_lost")) << all;
+    EXPECT_TRUE(has(all, "Set Autonomous Life to \"disabled\"")) << all;
+    mock.signal(SIGINT);
+    mock.wait(std::chrono::seconds(10));
+  }
 }
 
 }  // namespace pepper::app

@@ -16,6 +16,7 @@
 #include "naoqi_bridge/qi/qi_bridge.hpp"
 #include "naoqi_bridge/qi/session.hpp"
 #include "session/replay_session.hpp"
+#include "session/teach_session.hpp"
 #include "sim/synthetic_pattern_robot.hpp"
 
 namespace pepper::app {
@@ -151,6 +152,73 @@ TEST(SessionSupervision, AHeadLockThatCannotBeHeldEndsTheReplayWithTheBaseStoppe
     if (e.value("event", "") == "command") last_command = e;
   }
   EXPECT_TRUE(last_command.value("stop", false)) << events.str();
+}
+
+namespace {
+
+/// Teach options on the wire rig: QVGA, real-time pace, a bounded number of frames, and an
+/// operator drive intent refreshed on every poll (held arrow key).
+TeachSessionOptions wire_teach_options(const std::string& name) {
+  TeachSessionOptions o;
+  const auto dir = temp_file(name);
+  std::filesystem::remove_all(dir);
+  o.map_dir = dir / "map";
+  o.camera.width_px = 320;
+  o.camera.height_px = 240;
+  o.pace_hz = 30;
+  o.max_frames = 150;
+  return o;
+}
+
+std::function<std::optional<teach_ui::Intent>()> held_drive(int at_poll, std::function<void()> event,
+                                                            int& polls) {
+  auto given = std::make_shared<bool>(false);
+  return [at_poll, event, &polls, given]() -> std::optional<teach_ui::Intent> {
+    // One intent per loop iteration (the loop polls until nothing is pending).
+    if (*given) {
+      *given = false;
+      return std::nullopt;
+    }
+    *given = true;
+    if (++polls == at_poll) event();
+    teach_ui::Intent i;
+    i.kind = teach_ui::IntentKind::kDrive;
+    i.v_m_s = 0.15;
+    return i;
+  };
+}
+
+}  // namespace
+
+TEST(SessionSupervision, TeachReportsAMoveFailureAndEndsWhenTheHeadCannotBeHeld) {
+  {
+    WireRig rig;
+    SessionLink link(nullptr, nullptr);
+    int polls = 0;
+    link.set_intent_source(held_drive(
+        30, [&] { rig.server->set_move_failure("Safety: obstacle (test)"); }, polls));
+    const TeachResult r = run_teach_session(rig.connection, wire_teach_options("teach_move"), link);
+    EXPECT_EQ(r.outcome, "finished") << r.error;  // a warning, not a stop
+    bool warned = false;
+    for (const auto& w : r.warnings) warned = warned || w.find("move failed") != std::string::npos;
+    EXPECT_TRUE(warned);
+  }
+  {
+    WireRig rig;
+    SessionLink link(nullptr, nullptr);
+    int polls = 0;
+    link.set_intent_source(held_drive(
+        20, [&] { rig.server->take_head_back(0.6, /*sticky=*/true); }, polls));
+    const TeachResult r = run_teach_session(rig.connection, wire_teach_options("teach_head"), link);
+    EXPECT_EQ(r.outcome, "failed");
+    EXPECT_NE(r.error.find("head lock lost"), std::string::npos) << r.error;
+    EXPECT_LT(r.frames_seen, 150);
+    qi::QiSession watcher;
+    watcher.connect(rig.server->url());
+    const qi::Value v = watcher.call(watcher.service("ALMotion"), "getRobotVelocity", "()", {});
+    ASSERT_EQ(v.elements().size(), 3u);
+    EXPECT_EQ(v.elements()[0].as_double(), 0.0);
+  }
 }
 
 }  // namespace pepper::app
