@@ -27,7 +27,9 @@ constexpr double kMinTurnRadS = 0.05;
 void MotionSupervisor::on_command(const BaseVelocity& velocity, std::int64_t t_ns) {
   if (is_zero(velocity)) {
     command_since_ns_ = -1;
-  } else if (command_since_ns_ < 0) {
+  } else if (command_since_ns_ < 0 || t_ns - last_command_ns_ > options_.command_fresh_ns) {
+    // A start, or a resume after a gap (a frozen app): the robot-side horizon may have stopped
+    // the base meanwhile, so it ramps up again and gets `move_settle` before being judged.
     command_since_ns_ = t_ns;
   }
   command_ = velocity;

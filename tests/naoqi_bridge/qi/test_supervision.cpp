@@ -52,8 +52,9 @@ TEST(MotionSupervisor, AMoveFailsOnlyAfterSettlingAndTwoDisagreeingReadbacks) {
   auto early = s.snapshot(300 * kMs);
   EXPECT_FALSE(early.counts);
   EXPECT_FALSE(s.on_motion_readback(early, {}, false).has_value());
-  // Settled, refreshed: the first disagreement is not yet a failure, the second is.
-  s.on_command({0.2, 0.0, 0.1}, 750 * kMs);
+  // Settled, refreshed (a command every 50 ms, as a session sends them): the first
+  // disagreement is not yet a failure, the second is.
+  for (int t_ms = 50; t_ms <= 750; t_ms += 50) s.on_command({0.2, 0.0, 0.1}, t_ms * kMs);
   auto snap = s.snapshot(800 * kMs);
   ASSERT_TRUE(snap.counts);
   EXPECT_FALSE(s.on_motion_readback(snap, {0.0, 0.0, 0.0}, false).has_value());
@@ -73,6 +74,9 @@ TEST(MotionSupervisor, StaleOrStoppedCommandsAreNotJudged) {
   s.on_command({0.2, 0.0, 0.0}, 0);
   // The last command is older than the robot-side horizon: it may have ended by itself.
   EXPECT_FALSE(s.snapshot(1000 * kMs).counts);
+  // Commands again after the gap (a frozen app resumed): a new ramp, not judged at once.
+  s.on_command({0.2, 0.0, 0.0}, 900 * kMs);
+  EXPECT_FALSE(s.snapshot(950 * kMs).counts);
   s.on_command({0.0, 0.0, 0.0}, 1000 * kMs);
   const auto stopped = s.snapshot(1050 * kMs);
   EXPECT_FALSE(stopped.counts);

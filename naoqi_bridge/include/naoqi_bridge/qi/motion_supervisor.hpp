@@ -7,7 +7,8 @@
 //
 // Move failure (a MoveFailed as NAOqi raises it when external collision protection refuses or
 // stops a move, when the charging hatch is open or the robot rests): a non-zero command that has
-// been in force for `move_settle` (ALMotion ramps the velocity at its acceleration limits) and
+// been in force for `move_settle` (ALMotion ramps the velocity at its acceleration limits; a
+// command after a gap longer than `command_fresh` starts a new ramp) and
 // was refreshed within `command_fresh` (older commands may have ended by their robot-side
 // horizon), while the robot reads back moveIsActive false or a speed and turn rate below
 // `executed_fraction` of the command, on `failing_probes` read-backs in a row. getRobotVelocity
