@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <iostream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -319,4 +320,45 @@ TEST(QiSupervision, AHeadThatCannotBeHeldStopsTheBaseAndIsReportedLost) {
   EXPECT_EQ(v[2], 0.0);
   EXPECT_THROW(bridge.move({0.15, 0.0, 0.0}), nb::BridgeError);
   EXPECT_TRUE(bridge.needs_operator());
+}
+
+// With the default period (500 ms) and rules: how long from the robot's misbehaviour to the
+// operator's warning / the stop. Generous bounds; the figures are printed ("[measured]").
+TEST(QiSupervision, DefaultTimingFromMisbehaviourToWarningAndStop) {
+  Rig rig;
+  qi::QiBridgeOptions o = rig.bridge_options();
+  o.supervise_period = qi::QiBridgeOptions{}.supervise_period;
+  o.supervisor = qi::MotionSupervisorOptions{};
+  qi::QiBridge bridge(o);
+  bridge.connect();
+  ASSERT_TRUE(bridge.lock_head({}).holding);
+  auto drive = [&] {
+    try {
+      bridge.move({0.15, 0.0, 0.0});
+    } catch (const nb::BridgeError&) {
+    }
+  };
+  std::vector<std::string> warnings;
+  // Driving for a while first: the command is settled when the failure starts.
+  supervise_until(bridge, warnings, [](const auto&) { return false; }, drive, 1000ms);
+  ASSERT_TRUE(warnings.empty()) << joined(warnings);
+  auto t0 = std::chrono::steady_clock::now();
+  rig.server->set_move_failure("Safety: obstacle (timing)");
+  supervise_until(bridge, warnings, [&](const auto&) { return contains(warnings, "move failed"); },
+                  drive, 10000ms);
+  const double warn_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_TRUE(contains(warnings, "move failed")) << joined(warnings);
+  EXPECT_LT(warn_ms, 5000.0);
+  rig.server->set_move_failure("");
+  t0 = std::chrono::steady_clock::now();
+  rig.server->take_head_back(0.6, /*sticky=*/true);
+  const auto s = supervise_until(bridge, warnings, [](const auto& x) { return x.head_lock_lost; },
+                                 drive, 10000ms);
+  const double lost_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_TRUE(s.head_lock_lost);
+  EXPECT_LT(lost_ms, 5000.0);
+  std::cout << "[measured] move failure -> warning: " << warn_ms
+            << " ms; head taken (sticky) -> base stopped, head_lock_lost: " << lost_ms << " ms\n";
 }
