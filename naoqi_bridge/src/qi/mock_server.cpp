@@ -409,7 +409,9 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
 
   /// Autonomous Life holding the head: put it back on the tracked person.
   void hold_tracked_head_locked() {
-    if (head_taken && awareness_enabled) robot.set_joint_angles({"HeadYaw"}, {tracked_head_yaw_rad});
+    if (head_taken && awareness_enabled) {
+      robot.set_joint_angles({"HeadYaw"}, {tracked_head_yaw_rad});
+    }
   }
 
   // -------------------------------------------------------------------------------------------

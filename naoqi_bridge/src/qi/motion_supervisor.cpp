@@ -62,7 +62,8 @@ std::optional<std::string> MotionSupervisor::on_motion_readback(const CommandSna
   }
   bool executed = !(move_active.has_value() && !*move_active);
   if (executed) {
-    const bool speed_ok = cmd_speed < kMinSpeedMS || speed >= options_.executed_fraction * cmd_speed;
+    const bool speed_ok =
+        cmd_speed < kMinSpeedMS || speed >= options_.executed_fraction * cmd_speed;
     const bool turn_ok = cmd_turn < kMinTurnRadS || turn >= options_.executed_fraction * cmd_turn;
     executed = speed_ok && turn_ok;
   }

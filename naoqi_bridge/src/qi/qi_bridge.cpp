@@ -733,7 +733,8 @@ void QiBridge::send_probe_locked(std::int64_t now_ns) {
     if (life_ && options_.disable_autonomous_life && life_->meta.find("getState", "()")) {
       p.life = session_->call_async(*life_, "getState", "()", {});
     }
-    if (awareness_ && options_.disable_basic_awareness && awareness_->meta.find("isEnabled", "()")) {
+    if (awareness_ && options_.disable_basic_awareness &&
+        awareness_->meta.find("isEnabled", "()")) {
       p.awareness = session_->call_async(*awareness_, "isEnabled", "()", {});
     }
     p.head_angles = session_->call_async(*motion_, "getAngles", "(mb)",
@@ -764,7 +765,9 @@ void QiBridge::judge_probe(Probe& p, RobotSupervision& out) {
   if (auto v = reply_of(p.velocity)) {
     try {
       const auto& e = v->elements();
-      if (e.size() == 3) measured = BaseVelocity{e[0].as_double(), e[1].as_double(), e[2].as_double()};
+      if (e.size() == 3) {
+        measured = BaseVelocity{e[0].as_double(), e[1].as_double(), e[2].as_double()};
+      }
     } catch (const std::exception&) {
     }
   }
@@ -874,9 +877,10 @@ void QiBridge::judge_probe(Probe& p, RobotSupervision& out) {
     }
     const std::vector<float> targets = {static_cast<float>(p.head->head_yaw_rad),
                                         static_cast<float>(p.head->head_pitch_rad), 0.f, 0.f, 0.f};
+    const auto speed = static_cast<float>(options_.head_max_speed_fraction);
     (void)session_->call_async(*motion_, "setAngles", "(mmf)",
                                {Value::strings(kLockedJoints), Value::floats(targets),
-                                Value::float32(static_cast<float>(options_.head_max_speed_fraction))});
+                                Value::float32(speed)});
   } catch (const std::exception&) {
     // A lost connection shows in state(); the next read-back judges again.
   }

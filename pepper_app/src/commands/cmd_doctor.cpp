@@ -127,8 +127,8 @@ bool has_method(const qi::ServiceHandle& h, const char* name, const char* sig) {
 void check_version(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
   const std::string check = "naoqi version";
   std::string version, source;
-  for (const auto& [svc, method] : {std::pair<const char*, const char*>{"ALSystem", "systemVersion"},
-                                    {"ALMotion", "version"}}) {
+  using Source = std::pair<const char*, const char*>;  // service, method
+  for (const auto& [svc, method] : {Source{"ALSystem", "systemVersion"}, {"ALMotion", "version"}}) {
     try {
       const auto h = session.service(svc);
       if (!has_method(h, method, "()")) continue;
@@ -315,8 +315,9 @@ const std::vector<const char*> kStateChecks = {"naoqi version", "battery",
 /// The last line (verdict of the whole run) and the exit code: 0 when nothing failed.
 int summarize(const Report& report) {
   const std::string warned =
-      report.warnings() == 0 ? ""
-                             : std::to_string(report.warnings()) + " warning(s): see the WARN lines";
+      report.warnings() == 0
+          ? ""
+          : std::to_string(report.warnings()) + " warning(s): see the WARN lines";
   if (report.failures() == 0) {
     std::cout << "all checks passed" << (warned.empty() ? "" : ", " + warned) << "\n";
   } else {

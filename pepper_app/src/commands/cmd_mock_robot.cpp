@@ -68,7 +68,8 @@ class StateEvents {
       };
       std::vector<Due> due;
       if (!a.fail_moves.empty()) {
-        due.push_back({a.fail_moves_after_s, [&server, a] { server.set_move_failure(a.fail_moves); }});
+        due.push_back(
+            {a.fail_moves_after_s, [&server, a] { server.set_move_failure(a.fail_moves); }});
       }
       if (a.take_head_after_s >= 0) {
         due.push_back({a.take_head_after_s, [&server, a] {

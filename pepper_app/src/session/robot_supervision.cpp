@@ -11,12 +11,12 @@ SupervisionStep supervise_robot(naoqi_bridge::RobotBridge& bridge, SessionLink& 
     step.warnings.push_back(w);
   }
   if (s.measured_velocity) {
-    step.telemetry = {{"v_x_m_s", s.measured_velocity->v_x_m_s},
-                      {"v_y_m_s", s.measured_velocity->v_y_m_s},
-                      {"omega_rad_s", s.measured_velocity->omega_rad_s},
-                      {"move_active", s.move_active ? nlohmann::json(*s.move_active)
-                                                    : nlohmann::json(nullptr)},
-                      {"move_failing", s.move_failing}};
+    step.telemetry = {
+        {"v_x_m_s", s.measured_velocity->v_x_m_s},
+        {"v_y_m_s", s.measured_velocity->v_y_m_s},
+        {"omega_rad_s", s.measured_velocity->omega_rad_s},
+        {"move_active", s.move_active ? nlohmann::json(*s.move_active) : nlohmann::json(nullptr)},
+        {"move_failing", s.move_failing}};
   }
   if (s.head_lock_lost) {
     step.stop_reason = s.head_lock_detail +

@@ -6,11 +6,10 @@
 // A head lock that cannot be held ends the session: the bridge has already stopped the base; the
 // loop stops it again on its own stop path and reports `stop_reason`.
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "naoqi_bridge/robot_bridge.hpp"
 #include "session/session_link.hpp"

@@ -4,8 +4,8 @@
 // naming them, not a crash. Both programs run as subprocesses, as an operator runs them. The
 // mock's simulation options also drive a replay's supervision end to end: a move failure is
 // printed as a robot_warning event, a head Autonomous Life keeps ends the replay.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -125,7 +125,8 @@ struct DoctorRun {
   std::string all;
 };
 
-DoctorRun run_doctor_against(const std::vector<std::string>& mock_options, const std::string& name) {
+DoctorRun run_doctor_against(const std::vector<std::string>& mock_options,
+                             const std::string& name) {
   const fs::path dir = fresh_dir(name);
   std::vector<std::string> args = {"mock-robot", "--listen", "tcp://127.0.0.1:0"};
   args.insert(args.end(), mock_options.begin(), mock_options.end());
@@ -209,8 +210,7 @@ TEST(DoctorE2E, MissingServicesGiveWarningsNamingThem) {
   // The version falls back to ALMotion.version when ALSystem is missing.
   EXPECT_TRUE(has(line_of(r.out, "naoqi version"), "ALMotion.version")) << r.out;
   // A required service missing fails, still without a crash.
-  const DoctorRun no_motion =
-      run_doctor_against({"--without-service", "ALMotion"}, "no_motion");
+  const DoctorRun no_motion = run_doctor_against({"--without-service", "ALMotion"}, "no_motion");
   EXPECT_EQ(no_motion.code, 1) << no_motion.all;
   EXPECT_EQ(line_of(no_motion.out, "service ALMotion").rfind("FAIL", 0), 0u) << no_motion.out;
   EXPECT_TRUE(has(no_motion.out, "check(s) failed")) << no_motion.all;
@@ -239,15 +239,15 @@ TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
 
   // 1. The robot stops executing moves 4 s after start-up (an obstacle): warned, not stopped.
   {
-    Proc mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile,
-               "--fail-moves", "Safety: obstacle (e2e)", "--fail-moves-after-s", "4"},
+    Proc mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile, "--fail-moves",
+               "Safety: obstacle (e2e)", "--fail-moves-after-s", "4"},
               dir, "mock_fail");
     const std::string url = start_mock(mock);
     ASSERT_FALSE(url.empty()) << mock.both();
-    Proc replay(cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
-                     "150"},
-                    kQvga),
-                dir, "replay_fail");
+    Proc replay(
+        cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "150"},
+            kQvga),
+        dir, "replay_fail");
     replay.wait(std::chrono::seconds(90));
     const std::string out = replay.out();
     EXPECT_TRUE(has(out, "\"event\":\"robot_warning\"")) << replay.both();
@@ -264,10 +264,10 @@ TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
               dir, "mock_head");
     const std::string url = start_mock(mock);
     ASSERT_FALSE(url.empty()) << mock.both();
-    Proc replay(cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
-                     "600"},
-                    kQvga),
-                dir, "replay_head");
+    Proc replay(
+        cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "600"},
+            kQvga),
+        dir, "replay_head");
     EXPECT_EQ(replay.wait(std::chrono::seconds(90)), 1) << replay.both();
     const std::string all = replay.both();
     EXPECT_TRUE(has(all, "head_lock_lost")) << all;

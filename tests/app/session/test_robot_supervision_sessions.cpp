@@ -7,10 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "naoqi_bridge/qi/mock_server.hpp"
 #include "naoqi_bridge/qi/qi_bridge.hpp"
@@ -99,7 +98,8 @@ TEST(SessionSupervision, AMoveFailureIsWarnedAndInTheTelemetryWhileTheReplayGoes
   int n = 0;
   const ReplayResult r = run_replay_session(
       rig.connection, qvga_map(), wire_options(telemetry), link,
-      driving_with(30, [&] { rig.server->set_move_failure("Safety: obstacle (test)"); }, n));
+      driving_with(
+          30, [&] { rig.server->set_move_failure("Safety: obstacle (test)"); }, n));
   EXPECT_EQ(r.outcome, "max_frames") << r.detail << r.error;  // a warning, not a stop
   bool warned = false, cause = false;
   for (const auto& e : json_lines(events.str())) {
@@ -132,9 +132,10 @@ TEST(SessionSupervision, AHeadLockThatCannotBeHeldEndsTheReplayWithTheBaseStoppe
   std::ostringstream events;
   SessionLink link(nullptr, &events);
   int n = 0;
-  const ReplayResult r = run_replay_session(
-      rig.connection, qvga_map(), wire_options(temp_file("head.jsonl")), link,
-      driving_with(20, [&] { rig.server->take_head_back(0.6, /*sticky=*/true); }, n));
+  const ReplayResult r =
+      run_replay_session(rig.connection, qvga_map(), wire_options(temp_file("head.jsonl")), link,
+                         driving_with(
+                             20, [&] { rig.server->take_head_back(0.6, /*sticky=*/true); }, n));
   EXPECT_EQ(r.outcome, "head_lock_lost") << r.detail << r.error;
   EXPECT_NE(r.detail.find("head lock lost"), std::string::npos) << r.detail;
   EXPECT_NE(r.detail.find("Set Autonomous Life to \"disabled\""), std::string::npos) << r.detail;
@@ -170,7 +171,8 @@ TeachSessionOptions wire_teach_options(const std::string& name) {
   return o;
 }
 
-std::function<std::optional<teach_ui::Intent>()> held_drive(int at_poll, std::function<void()> event,
+std::function<std::optional<teach_ui::Intent>()> held_drive(int at_poll,
+                                                            std::function<void()> event,
                                                             int& polls) {
   auto given = std::make_shared<bool>(false);
   return [at_poll, event, &polls, given]() -> std::optional<teach_ui::Intent> {

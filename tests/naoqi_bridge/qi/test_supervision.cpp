@@ -188,9 +188,9 @@ TEST(MockRobotState, ServesVersionBatteryChargerAndLeavesServicesOut) {
                qi::RemoteCallError);
   const auto motion = s.service("ALMotion");
   EXPECT_FALSE(s.call(motion, "robotIsWakeUp", "()", {}).as_bool());
-  EXPECT_FALSE(s.call(motion, "getExternalCollisionProtectionEnabled", "(s)",
-                      {qi::Value::string("Move")})
-                   .as_bool());
+  EXPECT_FALSE(
+      s.call(motion, "getExternalCollisionProtectionEnabled", "(s)", {qi::Value::string("Move")})
+          .as_bool());
   EXPECT_EQ(s.call(s.service("ALAutonomousLife"), "getState", "()", {}).as_string(), "solitary");
   EXPECT_THROW(s.service("ALBasicAwareness"), qi::ServiceNotFound);
   // Resting and charging: a move is answered but the base stays still, and MoveFailed says why.
@@ -214,7 +214,8 @@ TEST(MockRobotState, NextRobotPositionIsWhereTheBaseStopsWhenStoppedNow) {
   const auto motion = s.service("ALMotion");
   auto floats = [&](const char* m, std::vector<qi::Value> args, const char* sig) {
     std::vector<double> out;
-    const qi::Value reply = s.call(motion, m, sig, std::move(args));  // kept: elements() refer to it
+    const qi::Value reply =
+        s.call(motion, m, sig, std::move(args));  // kept: elements() refer to it
     for (const auto& e : reply.elements()) out.push_back(e.as_double());
     return out;
   };
@@ -274,7 +275,8 @@ TEST(QiSupervision, AHeadTakenBackByAutonomousLifeIsRetaken) {
   ASSERT_TRUE(bridge.lock_head({}).holding);
   ASSERT_EQ(rig.server->autonomous_life_state(), "disabled");
   std::vector<std::string> warnings;
-  supervise_until(bridge, warnings, [](const auto&) { return false; }, {}, 200ms);
+  supervise_until(
+      bridge, warnings, [](const auto&) { return false; }, {}, 200ms);
   EXPECT_TRUE(warnings.empty()) << joined(warnings);
   // Mid-session, Autonomous Life comes back and turns the head to a person.
   rig.server->take_head_back(0.6, false);
@@ -303,11 +305,11 @@ TEST(QiSupervision, AHeadThatCannotBeHeldStopsTheBaseAndIsReportedLost) {
     }
   };
   std::vector<std::string> warnings;
-  supervise_until(bridge, warnings, [](const auto& x) { return x.measured_velocity.has_value(); },
-                  drive);
+  supervise_until(
+      bridge, warnings, [](const auto& x) { return x.measured_velocity.has_value(); }, drive);
   rig.server->take_head_back(0.6, /*sticky=*/true);
-  const auto s = supervise_until(bridge, warnings, [](const auto& x) { return x.head_lock_lost; },
-                                 drive);
+  const auto s = supervise_until(
+      bridge, warnings, [](const auto& x) { return x.head_lock_lost; }, drive);
   ASSERT_TRUE(s.head_lock_lost) << joined(warnings);
   EXPECT_NE(s.head_lock_detail.find("head lock lost"), std::string::npos);
   EXPECT_NE(s.head_lock_detail.find("Autonomous Life is 'solitary'"), std::string::npos)
@@ -340,12 +342,14 @@ TEST(QiSupervision, DefaultTimingFromMisbehaviourToWarningAndStop) {
   };
   std::vector<std::string> warnings;
   // Driving for a while first: the command is settled when the failure starts.
-  supervise_until(bridge, warnings, [](const auto&) { return false; }, drive, 1000ms);
+  supervise_until(
+      bridge, warnings, [](const auto&) { return false; }, drive, 1000ms);
   ASSERT_TRUE(warnings.empty()) << joined(warnings);
   auto t0 = std::chrono::steady_clock::now();
   rig.server->set_move_failure("Safety: obstacle (timing)");
-  supervise_until(bridge, warnings, [&](const auto&) { return contains(warnings, "move failed"); },
-                  drive, 10000ms);
+  supervise_until(
+      bridge, warnings, [&](const auto&) { return contains(warnings, "move failed"); }, drive,
+      10000ms);
   const double warn_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_TRUE(contains(warnings, "move failed")) << joined(warnings);
@@ -353,8 +357,8 @@ TEST(QiSupervision, DefaultTimingFromMisbehaviourToWarningAndStop) {
   rig.server->set_move_failure("");
   t0 = std::chrono::steady_clock::now();
   rig.server->take_head_back(0.6, /*sticky=*/true);
-  const auto s = supervise_until(bridge, warnings, [](const auto& x) { return x.head_lock_lost; },
-                                 drive, 10000ms);
+  const auto s = supervise_until(
+      bridge, warnings, [](const auto& x) { return x.head_lock_lost; }, drive, 10000ms);
   const double lost_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_TRUE(s.head_lock_lost);

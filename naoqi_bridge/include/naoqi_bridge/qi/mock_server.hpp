@@ -9,8 +9,9 @@
 // ALBattery.getBatteryCharge and ALMemory.getData for the battery keys and ALMotion/MoveFailed
 // (docs/mock_robot.md lists them and their sources). MockRobotState sets the state they report
 // (NAOqi version, battery, charger, awake or resting, Autonomous Life, collision protection, and
-// services left out); the robot-state hooks below change it while clients are connected. Backing: getImageRemote renders SimRobot::capture() at the subscribed
-// resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints;
+// services left out); the robot-state hooks below change it while clients are connected.
+// Backing: getImageRemote renders SimRobot::capture() at the subscribed resolution;
+// move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints;
 // getRobotPosition(useSensors) -> SimRobot::odometry (true: wheels, false: commands).
 // moveTo(x, y, theta, time) drives the constant twist that reaches the pose in `time`, then
 // stops the base by itself and answers the Call (bounded_move.hpp), like NAOqi's blocking

@@ -60,8 +60,8 @@ class MotionSupervisor {
 
   struct HeadReadback {
     std::optional<std::string> life_state;  ///< when ALAutonomousLife answered
-    std::optional<bool> awareness_enabled;   ///< when ALBasicAwareness answered
-    std::optional<double> max_error_rad;     ///< |target - measured| over the head joints
+    std::optional<bool> awareness_enabled;  ///< when ALBasicAwareness answered
+    std::optional<double> max_error_rad;    ///< |target - measured| over the head joints
   };
   enum class HeadVerdict { kHolding, kRetake, kLost };
   /// `expect_life_disabled` / `expect_awareness_off`: the bridge turned them off at lock time.
