@@ -6,20 +6,20 @@
 // Exit code 0 when nothing failed (warnings allowed), 1 when a check failed, 2 for bad options.
 // The robot-state checks read only (they run before the head-lock check, which wakes the robot
 // up and turns Autonomous Life off for its duration); their services and keys are listed in
-// docs/naoqi_bridge.md with the source of each.
+// docs/naoqi_bridge.md with the source of each (doctor_robot_state.hpp).
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <string>
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
+#include "commands/doctor_report.hpp"
+#include "commands/doctor_robot_state.hpp"
 #include "session/known_robots.hpp"
 #include "session/robot_connection.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
@@ -33,6 +33,10 @@ namespace {
 namespace qi = pepper::naoqi_bridge::qi;
 namespace nb = pepper::naoqi_bridge;
 using Clock = std::chrono::steady_clock;
+using doctor::classify;
+using doctor::fmt;
+using doctor::Report;
+using doctor::summarize;
 
 struct DoctorArgs {
   std::string robot;
@@ -44,53 +48,6 @@ struct DoctorArgs {
   int timeout_ms = 5000;
 };
 
-class Report {
- public:
-  void ok(const std::string& check, const std::string& msg) { line("OK  ", check, msg, ""); }
-  /// Works, with a limit the operator must know about (not counted as a failure); `todo` says
-  /// what to do about it.
-  void warn(const std::string& check, const std::string& msg, const std::string& todo = "") {
-    line("WARN", check, msg, todo);
-    ++warnings_;
-  }
-  void fail(const std::string& check, const std::string& msg, const std::string& todo = "") {
-    line("FAIL", check, msg, todo);
-    ++failures_;
-  }
-  int failures() const { return failures_; }
-  int warnings() const { return warnings_; }
-
- private:
-  void line(const char* tag, const std::string& check, const std::string& msg,
-            const std::string& todo) {
-    std::cout << tag << "  " << std::left << std::setw(24) << check << " " << msg
-              << (todo.empty() ? "" : " -> " + todo) << "\n"
-              << std::flush;
-  }
-  int failures_ = 0;
-  int warnings_ = 0;
-};
-
-std::string classify(const std::exception& e) {
-  if (dynamic_cast<const qi::AuthenticationError*>(&e)) return std::string("login: ") + e.what();
-  if (dynamic_cast<const qi::TlsError*>(&e)) return std::string("TLS: ") + e.what();
-  if (dynamic_cast<const qi::ConnectError*>(&e)) {
-    return std::string("host unreachable: ") + e.what();
-  }
-  if (dynamic_cast<const qi::ServiceNotFound*>(&e))
-    return std::string("missing service: ") + e.what();
-  if (dynamic_cast<const qi::CallTimeout*>(&e)) return std::string("timeout: ") + e.what();
-  if (dynamic_cast<const qi::ConnectionLost*>(&e))
-    return std::string("connection lost: ") + e.what();
-  return e.what();
-}
-
-std::string fmt(double v, int decimals) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(decimals) << v;
-  return os.str();
-}
-
 struct ServiceCheck {
   const char* name;
   std::vector<std::pair<const char*, const char*>> methods;  // name, parameters signature
@@ -99,233 +56,6 @@ struct ServiceCheck {
   bool required = true;
   const char* without = "";
 };
-
-// ---- Robot state (issue 30 item 7): read-only checks through the services a NAOqi 2.5 / 2.9
-// robot offers (docs/naoqi_bridge.md "doctor's robot-state checks" gives each method's source).
-
-constexpr int kBatteryFailBelowPercent = 20;  // a tour may end in a rest or a shutdown
-constexpr int kBatteryWarnBelowPercent = 40;  // enough for a short session only
-
-/// The service, or nullopt after a WARN that names it and what was not checked.
-std::optional<qi::ServiceHandle> optional_service(qi::QiSession& session, const char* name,
-                                                  Report& report, const std::string& check,
-                                                  const std::string& todo) {
-  try {
-    return session.service(name);
-  } catch (const qi::ServiceNotFound&) {
-    report.warn(check, std::string("not checked: the robot has no ") + name + " service", todo);
-  } catch (const std::exception& e) {
-    report.warn(check, std::string("not checked: ") + name + ": " + classify(e), todo);
-  }
-  return std::nullopt;
-}
-
-bool has_method(const qi::ServiceHandle& h, const char* name, const char* sig) {
-  return h.meta.find(name, sig) != nullptr;
-}
-
-void check_version(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
-  const std::string check = "naoqi version";
-  std::string version, source;
-  using Source = std::pair<const char*, const char*>;  // service, method
-  for (const auto& [svc, method] : {Source{"ALSystem", "systemVersion"}, {"ALMotion", "version"}}) {
-    try {
-      const auto h = session.service(svc);
-      if (!has_method(h, method, "()")) continue;
-      version = session.call(h, method, "()", {}, t).as_string();
-      source = std::string(svc) + "." + method;
-      break;
-    } catch (const std::exception&) {
-    }
-  }
-  if (version.empty()) {
-    report.warn(check, "unknown: neither ALSystem.systemVersion nor ALMotion.version answered",
-                "read it on the robot's web page; this client was written for NAOqi 2.5 and 2.9");
-  } else if (version.rfind("2.5.", 0) == 0 || version.rfind("2.9.", 0) == 0) {
-    report.ok(check, "NAOqi " + version + " (" + source + "), a version this client was "
-                     "written for (2.5: tcp://ROBOT:9559, 2.9: tcps://ROBOT:9503 with login)");
-  } else {
-    report.warn(check, "NAOqi " + version + " (" + source + "), not 2.5 or 2.9",
-                "methods are resolved by name and signature, but watch the first session "
-                "closely (stop with Ctrl-C or the UI's STOP)");
-  }
-}
-
-void check_battery(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
-  const std::string check = "battery";
-  const auto h = optional_service(session, "ALBattery", report, check,
-                                  "look at the charge on the robot's tablet or web page");
-  if (!h) return;
-  try {
-    const long pct = static_cast<long>(session.call(*h, "getBatteryCharge", "()", {}, t).as_int());
-    const std::string msg = std::to_string(pct) + " % charged";
-    if (pct < kBatteryFailBelowPercent) {
-      report.fail(check, msg + " (below " + std::to_string(kBatteryFailBelowPercent) + " %)",
-                  "charge Pepper before driving: at this charge a tour may end in a rest or a "
-                  "shutdown");
-    } else if (pct < kBatteryWarnBelowPercent) {
-      report.warn(check, msg + " (below " + std::to_string(kBatteryWarnBelowPercent) + " %)",
-                  "enough for a short session only; charge it soon");
-    } else {
-      report.ok(check, msg);
-    }
-  } catch (const std::exception& e) {
-    report.warn(check, "ALBattery.getBatteryCharge: " + classify(e),
-                "look at the charge on the robot's tablet or web page");
-  }
-}
-
-void check_charging(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
-  const std::string check = "charger";
-  const std::string todo_unknown =
-      "make sure the charger is unplugged and the power hatch closed (Pepper does not move "
-      "while it is open)";
-  const auto h = optional_service(session, "ALMemory", report, check, todo_unknown);
-  if (!h) return;
-  // The battery current (A) is positive while the charger feeds the battery; NAOqi 2.5 keeps it
-  // in ALMemory under the device key below.
-  const char* key = "Device/SubDeviceList/Battery/Current/Sensor/Value";
-  try {
-    const double amps = session.call(*h, "getData", "(s)", {qi::Value::string(key)}, t)
-                            .unwrapped()
-                            .as_double();
-    const std::string msg = "battery current " + fmt(amps, 2) + " A";
-    if (amps > 0.05) {
-      report.fail(check, "plugged in, charging (" + msg + ")",
-                  "unplug the charger and close the power hatch: Pepper refuses to move while "
-                  "it is open");
-    } else {
-      report.ok(check, "not charging (" + msg + "): the power hatch can be closed");
-    }
-  } catch (const std::exception& e) {
-    report.warn(check, std::string("unknown: ALMemory.getData(\"") + key + "\"): " + classify(e),
-                todo_unknown);
-  }
-}
-
-void check_wake(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
-  const std::string check = "wake state";
-  try {
-    const auto h = session.service("ALMotion");
-    if (!has_method(h, "robotIsWakeUp", "()")) {
-      report.warn(check, "not checked: ALMotion has no robotIsWakeUp()",
-                  "look at the robot: resting means head down, motors off");
-      return;
-    }
-    if (session.call(h, "robotIsWakeUp", "()", {}, t).as_bool()) {
-      report.ok(check, "awake (motors on)");
-    } else {
-      report.warn(check, "resting (motors off): it cannot drive like this",
-                  "teach and replay wake it up (ALMotion.wakeUp) and it stands up, and so does "
-                  "this doctor's head-lock check below: keep the space around it clear");
-    }
-  } catch (const std::exception& e) {
-    report.warn(check, "ALMotion.robotIsWakeUp: " + classify(e),
-                "look at the robot: resting means head down, motors off");
-  }
-}
-
-void check_autonomous_life(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
-  const std::string check = "autonomous life";
-  const auto h = optional_service(
-      session, "ALAutonomousLife", report, check,
-      "nothing turns autonomous behaviour off for the session: make sure the robot runs none");
-  if (!h) return;
-  try {
-    const std::string state = session.call(*h, "getState", "()", {}, t).as_string();
-    if (state == "disabled") {
-      report.ok(check, "disabled: nothing moves the head or the base on its own");
-    } else if (state == "solitary" || state == "interactive") {
-      report.warn(check,
-                  "'" + state + "': Pepper turns its head and base towards people (basic "
-                  "awareness) and may start activities by itself",
-                  "teach and replay set it to disabled for the session and restore it after; "
-                  "if a session stops with 'head lock lost', set it to disabled on the robot "
-                  "first");
-    } else {
-      report.warn(check, "'" + state + "': the robot is handling a safety event",
-                  "check the robot and its tablet, then set Autonomous Life to disabled");
-    }
-  } catch (const std::exception& e) {
-    report.warn(check, "ALAutonomousLife.getState: " + classify(e),
-                "check Autonomous Life on the robot's web page");
-  }
-}
-
-void check_collision_protection(qi::QiSession& session, Report& report,
-                                std::chrono::milliseconds t) {
-  const std::string check = "collision protection";
-  try {
-    const auto h = session.service("ALMotion");
-    if (!has_method(h, "getExternalCollisionProtectionEnabled", "(s)")) {
-      report.warn(check, "not checked: ALMotion has no getExternalCollisionProtectionEnabled(s)",
-                  "assume nothing on the robot stops the base before obstacles");
-      return;
-    }
-    const bool on = session.call(h, "getExternalCollisionProtectionEnabled", "(s)",
-                                 {qi::Value::string("Move")}, t)
-                        .as_bool();
-    if (on) {
-      report.ok(check, "external collision protection on for the move: the base stops before "
-                       "obstacles (a session reports such a stop as 'move failed')");
-    } else {
-      report.warn(check, "external collision protection off for the move: nothing on the robot "
-                         "stops the base before an obstacle",
-                  "turn it on (ALMotion.setExternalCollisionProtectionEnabled(\"Move\", true)) "
-                  "unless the taught path passes closer to obstacles than it allows");
-    }
-  } catch (const std::exception& e) {
-    report.warn(check, "ALMotion.getExternalCollisionProtectionEnabled: " + classify(e),
-                "assume nothing on the robot stops the base before obstacles");
-  }
-}
-
-void check_odometry(qi::QiSession& session, Report& report, std::chrono::milliseconds t) {
-  const std::string check = "odometry";
-  const std::string todo = "sessions then measure the map's distances by the commanded speeds";
-  try {
-    const auto h = session.service("ALMotion");
-    if (!has_method(h, "getRobotPosition", "(b)")) {
-      report.warn(check, "ALMotion has no getRobotPosition(b)", todo);
-      return;
-    }
-    const auto v = session.call(h, "getRobotPosition", "(b)", {qi::Value::boolean(true)}, t);
-    const auto& e = v.elements();
-    bool finite = e.size() == 3;
-    for (const auto& x : e) finite = finite && std::isfinite(x.as_double());
-    if (finite) {
-      report.ok(check, "ALMotion.getRobotPosition(true) answers [" + fmt(e[0].as_double(), 3) +
-                           ", " + fmt(e[1].as_double(), 3) + ", " + fmt(e[2].as_double(), 3) +
-                           "] (x m, y m, theta rad)");
-    } else {
-      report.warn(check, "ALMotion.getRobotPosition(true) returned " + v.to_debug_string() +
-                             ", not three finite numbers",
-                  todo);
-    }
-  } catch (const std::exception& e) {
-    report.warn(check, "ALMotion.getRobotPosition(true): " + classify(e), todo);
-  }
-}
-
-const std::vector<const char*> kStateChecks = {"naoqi version", "battery",
-                                               "charger",       "wake state",
-                                               "autonomous life", "collision protection",
-                                               "odometry"};
-
-/// The last line (verdict of the whole run) and the exit code: 0 when nothing failed.
-int summarize(const Report& report) {
-  const std::string warned =
-      report.warnings() == 0
-          ? ""
-          : std::to_string(report.warnings()) + " warning(s): see the WARN lines";
-  if (report.failures() == 0) {
-    std::cout << "all checks passed" << (warned.empty() ? "" : ", " + warned) << "\n";
-  } else {
-    std::cout << report.failures() << " check(s) failed: fix the FAIL lines before driving"
-              << (warned.empty() ? "" : "; " + warned) << "\n";
-  }
-  return report.failures() == 0 ? 0 : 1;
-}
 
 int run_doctor(const DoctorArgs& a) {
   Report report;
@@ -403,7 +133,7 @@ int run_doctor(const DoctorArgs& a) {
                 "check the URL, that the robot is on and on this network (ping it), and the "
                 "login");
     for (const auto& s : services) report.fail(std::string("service ") + s.name, skipped);
-    for (const char* c : kStateChecks) report.fail(c, skipped);
+    for (const char* c : doctor::robot_state_checks()) report.fail(c, skipped);
     for (const char* c : {"camera", "head lock", "base"}) report.fail(c, skipped);
     return summarize(report);
   }
@@ -436,14 +166,7 @@ int run_doctor(const DoctorArgs& a) {
   }
   // The robot's state, read before the head-lock check below changes it (wakeUp, Autonomous
   // Life off for the duration of the check).
-  const auto t_call = std::chrono::milliseconds(a.timeout_ms);
-  check_version(session, report, t_call);
-  check_battery(session, report, t_call);
-  check_charging(session, report, t_call);
-  check_wake(session, report, t_call);
-  check_autonomous_life(session, report, t_call);
-  check_collision_protection(session, report, t_call);
-  check_odometry(session, report, t_call);
+  doctor::check_robot_state(session, report, std::chrono::milliseconds(a.timeout_ms));
   session.close();
 
   // 2. Camera, head lock and base through the bridge, as a session would use them.
