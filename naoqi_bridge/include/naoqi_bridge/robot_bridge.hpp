@@ -19,6 +19,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/base_velocity.hpp"
 #include "core/camera/intrinsics.hpp"
@@ -55,6 +56,25 @@ struct HeadLockStatus {
   double head_yaw_rad = 0.0;     ///< read back from the robot
   double head_pitch_rad = 0.0;   ///< read back from the robot
   double max_error_rad = 0.0;    ///< largest |target - measured| over the locked joints
+};
+
+/// What the robot itself shows during a session (RobotBridge::supervise()): whether it executes
+/// the commanded velocity and whether the head lock still holds.
+struct RobotSupervision {
+  /// The head lock cannot be held (Autonomous Life or awareness keeps taking the head back, or
+  /// the head stays off its target). The bridge has already stopped the base and refuses moves;
+  /// the session must end and tell the operator `head_lock_detail`.
+  bool head_lock_lost = false;
+  std::string head_lock_detail;
+  /// New since the last call, one sentence each for the operator: a move the robot does not
+  /// execute (and again when it does), a head lock taken back by the robot and re-established.
+  std::vector<std::string> warnings;
+  /// Latest read-back of the robot's own motion state (ALMotion.getRobotVelocity, moveIsActive);
+  /// empty until the first read-back.
+  std::optional<BaseVelocity> measured_velocity;
+  std::optional<bool> move_active;
+  /// The robot is not executing the commanded velocity now (a move failure in progress).
+  bool move_failing = false;
 };
 
 enum class ConnectionState { kDisconnected, kConnecting, kConnected, kLost };
@@ -97,6 +117,12 @@ class RobotBridge {
 
   /// Human-readable description of where the bridge is connected, e.g. "tcp://10.0.0.5:9559".
   virtual std::string describe() const = 0;
+
+  /// Non-blocking check of the robot's own state, called by sessions once per loop iteration:
+  /// reads back what the base executes and whether the head lock holds (a few asynchronous calls
+  /// at a fixed period), re-takes the head when the robot took it back, and stops the base when
+  /// the head cannot be held. Bridges without such read-backs keep this default (nothing to say).
+  virtual RobotSupervision supervise() { return {}; }
 
   /// Why the last frame came without the robot's odometry (Frame::odom empty), for the session
   /// to report; "" when it had it. Bridges that always fill it keep this default.

@@ -5,6 +5,7 @@
 #include <boost/asio/post.hpp>
 #include <boost/asio/ssl.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -28,8 +29,27 @@ namespace pepper::naoqi_bridge::qi {
 namespace asio = boost::asio;
 using tcp = asio::ip::tcp;
 
+std::vector<std::string> MockRobotState::validate() const {
+  std::vector<std::string> errors;
+  if (naoqi_version.empty()) errors.push_back("robot_state.naoqi_version must not be empty");
+  if (battery_percent < 0 || battery_percent > 100) {
+    errors.push_back("robot_state.battery_percent must be in 0..100, got " +
+                     std::to_string(battery_percent));
+  }
+  if (autonomous_life != "solitary" && autonomous_life != "interactive" &&
+      autonomous_life != "disabled" && autonomous_life != "safeguard") {
+    errors.push_back("robot_state.autonomous_life must be solitary, interactive, disabled or "
+                     "safeguard, got '" + autonomous_life + "'");
+  }
+  for (const auto& name : missing_services) {
+    if (name == "ServiceDirectory") errors.push_back("the ServiceDirectory cannot be left out");
+  }
+  return errors;
+}
+
 std::vector<std::string> MockServerOptions::validate() const {
   std::vector<std::string> errors;
+  for (const auto& e : robot_state.validate()) errors.push_back(e);
   try {
     (void)parse_url(listen_url);
   } catch (const BridgeError& e) {
@@ -310,7 +330,17 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
   bool awareness_enabled = true;
   bool awareness_paused = false;
   bool collision_protection = true;
-  bool awake = false;
+  bool awake = true;
+  bool charging = false;
+  int battery_percent = 87;
+  std::string naoqi_version;
+  /// Robot-state hooks: a move failure in force (its cause), and Autonomous Life holding the
+  /// head (the yaw it tracks; sticky: setState/setEnabled cannot turn it off).
+  std::string move_failure_cause;
+  std::optional<Value> move_failed_event;  ///< ALMemory "ALMotion/MoveFailed", once raised
+  bool head_taken = false;
+  bool head_taken_sticky = false;
+  double tracked_head_yaw_rad = 0.0;
   std::string posture = "Stand";
   BaseVelocity last_velocity;  ///< what the base executes now (getRobotVelocity, moveIsActive)
   /// The time-constrained moveTo in progress: NAOqi answers the Call when the move ends (it
@@ -333,7 +363,55 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
 
   Impl(sim::SimRobot& r, MockServerOptions o) : robot(r), options(std::move(o)) {
     latency = options.reply_latency;
+    const MockRobotState& st = options.robot_state;
+    life_state = st.autonomous_life;
+    // Autonomous Life's abilities follow its state (BasicAwareness is on in solitary and
+    // interactive, off in disabled: NAOqi's autonomous abilities table).
+    awareness_enabled = st.autonomous_life == "solitary" || st.autonomous_life == "interactive";
+    collision_protection = st.collision_protection;
+    awake = st.awake;
+    charging = st.charging;
+    battery_percent = st.battery_percent;
+    naoqi_version = st.naoqi_version;
     build_services();
+    for (const auto& name : st.missing_services) {
+      auto it = service_ids.find(name);
+      if (it == service_ids.end()) continue;
+      services.erase(it->second);
+      service_ids.erase(it);
+    }
+  }
+
+  /// Why the base cannot execute a move now ("" when it can), under the mutex: resting motors,
+  /// the charger plugged (power hatch open) or an injected failure (an obstacle).
+  std::string move_refusal_locked() const {
+    if (!move_failure_cause.empty()) return move_failure_cause;
+    if (!awake) return "robot is not awake (rest): motors off";
+    if (charging) return "power hatch open: locomotion is prohibited while charging";
+    return {};
+  }
+
+  /// A move NAOqi did not execute: the base stays still and ALMemory's ALMotion/MoveFailed holds
+  /// [cause, status, position], as NAOqi raises it when a move is not launched or is stopped.
+  void refuse_move(const std::string& cause) {
+    end_bounded_move(false);
+    robot.stop_move();
+    const core::OdometryPose p = robot.odometry(sim::OdometrySource::kCommands);
+    std::lock_guard lock(mutex);
+    last_velocity = {};
+    move_failed_event = Value::list(
+        Type::of(TypeKind::kDynamic),
+        {Value::dynamic(Value::string(cause)), Value::dynamic(Value::int32(1)),
+         Value::dynamic(Value::floats({static_cast<float>(p.x_m), static_cast<float>(p.y_m),
+                                       static_cast<float>(p.yaw_rad)}))});
+    log_event("move failed: " + cause);
+  }
+
+  /// Autonomous Life holding the head: put it back on the tracked person.
+  void hold_tracked_head_locked() {
+    if (head_taken && awareness_enabled) {
+      robot.set_joint_angles({"HeadYaw"}, {tracked_head_yaw_rad});
+    }
   }
 
   // -------------------------------------------------------------------------------------------
@@ -419,13 +497,21 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     dir.signals[106] = {106, "serviceAdded", "(Is)"};
     dir.signals[107] = {107, "serviceRemoved", "(Is)"};
 
+    auto module_version = [this](ServiceDef& s) {
+      // ALModule::version (uid 103 in NAOqi 2.5's ALModule methods): the NAOqi version.
+      s.add(103, "version", "()", "s",
+            [this](ConnState&, A) { return Value::string(naoqi_version); });
+    };
+
     // ALMotion (7.1)
     ServiceDef& motion = new_service("ALMotion", 2);
+    module_version(motion);
     motion.add(113, "wakeUp", "()", "v", [this](ConnState&, A) {
       std::lock_guard lock(mutex);
       awake = true;
       return Value();
     });
+    // (real 2.5 robots: rest and wakeUp also stiffen/relax the body; the mock tracks awake only)
     motion.add(114, "rest", "()", "v", [this](ConnState&, A) {
       end_bounded_move(false);
       robot.stop_move();
@@ -474,6 +560,8 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                  } catch (const sim::SimError& e) {
                    throw MethodFailure(std::string("ALMotion::setAngles: ") + e.what());
                  }
+                 std::lock_guard lock(mutex);
+                 hold_tracked_head_locked();  // awareness outranks the client while it is on
                  return Value();
                },
                {"names", "angles", "fractionMaxSpeed"});
@@ -496,8 +584,17 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
         throw MethodFailure("ALMotion::move: non-finite velocity (" + std::to_string(x) + ", " +
                             std::to_string(y) + ", " + std::to_string(theta) + ")");
       }
-      end_bounded_move(false);  // a new velocity replaces a moveTo in progress
       c.commanded_base = true;
+      std::string refusal;
+      {
+        std::lock_guard lock(mutex);
+        refusal = move_refusal_locked();
+      }
+      if (!refusal.empty() && (x != 0.0 || y != 0.0 || theta != 0.0)) {
+        refuse_move(refusal);  // answered like any move: the failure shows only on the robot
+        return Value();
+      }
+      end_bounded_move(false);  // a new velocity replaces a moveTo in progress
       BaseVelocity v{x, y, theta};
       robot.command_velocity(v);
       std::lock_guard lock(mutex);
@@ -547,6 +644,32 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                                        static_cast<float>(p.yaw_rad)});
                },
                {"useSensors"});
+    // getNextRobotPosition: where the base ends if stopMove is called now (NAOqi: the position
+    // that can no longer be changed; equal to getRobotPosition(false) when not moving). The mock
+    // brakes the executed velocity at ALMotion's default MaxAccXY 0.3 m/s^2 and MaxAccTheta
+    // 0.75 rad/s^2 (../shared/design/PEPPER.md) from the commanded-motion pose.
+    motion.add(181, "getNextRobotPosition", "()", "[f]", [this](ConnState&, A) {
+      const core::OdometryPose p = robot.odometry(sim::OdometrySource::kCommands);
+      BaseVelocity v;
+      {
+        std::lock_guard lock(mutex);
+        v = last_velocity;
+      }
+      constexpr double kAccXy = 0.3, kAccTheta = 0.75;
+      const double speed = std::hypot(v.v_x_m_s, v.v_y_m_s);
+      const double brake_m = speed * speed / (2.0 * kAccXy);
+      const double turn_rad =
+          std::copysign(v.omega_rad_s * v.omega_rad_s / (2.0 * kAccTheta), v.omega_rad_s);
+      double x = p.x_m, y = p.y_m;
+      if (speed > 0.0) {
+        // Direction of travel in the odometry frame, taken at mid-turn (a short arc).
+        const double heading = p.yaw_rad + std::atan2(v.v_y_m_s, v.v_x_m_s) + 0.5 * turn_rad;
+        x += brake_m * std::cos(heading);
+        y += brake_m * std::sin(heading);
+      }
+      return Value::floats({static_cast<float>(x), static_cast<float>(y),
+                            static_cast<float>(p.yaw_rad + turn_rad)});
+    });
     motion.add(183, "getRobotVelocity", "()", "[f]", [this](ConnState&, A) {
       std::lock_guard lock(mutex);
       return Value::floats({static_cast<float>(last_velocity.v_x_m_s),
@@ -660,7 +783,12 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
                  throw MethodFailure("ALAutonomousLife::setState: invalid state '" + s + "'");
                }
                std::lock_guard lock(mutex);
+               if (head_taken_sticky && s == "disabled") return Value();  // re-enabled at once
+               // Entering a state resets the autonomous abilities (BasicAwareness on in
+               // solitary and interactive, off in disabled).
+               if (s != life_state) awareness_enabled = s == "solitary" || s == "interactive";
                life_state = s;
+               if (s == "disabled") head_taken = false;
                return Value();
              },
              {"state"});
@@ -674,7 +802,9 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     aware.add(126, "setEnabled", "(b)", "v",
               [this](ConnState&, A a) {
                 std::lock_guard lock(mutex);
+                if (head_taken_sticky && !a[0].as_bool()) return Value();  // re-enabled at once
                 awareness_enabled = a[0].as_bool();
+                if (!awareness_enabled) head_taken = false;
                 return Value();
               },
               {"enabled"});
@@ -698,6 +828,41 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
     });
     aware.add(140, "setEngagementMode", "(s)", "v", [](ConnState&, A) { return Value(); });
     aware.add(143, "setTrackingMode", "(s)", "v", [](ConnState&, A) { return Value(); });
+
+    // ALSystem (NAOqi 2.5 ALSystem API: systemVersion() -> string, uid 119)
+    ServiceDef& system = new_service("ALSystem", 7);
+    module_version(system);
+    system.add(119, "systemVersion", "()", "s",
+               [this](ConnState&, A) { return Value::string(naoqi_version); });
+
+    // ALBattery (getBatteryCharge() -> int, percent)
+    ServiceDef& battery = new_service("ALBattery", 8);
+    module_version(battery);
+    battery.add(114, "getBatteryCharge", "()", "i", [this](ConnState&, A) {
+      std::lock_guard lock(mutex);
+      return Value::int32(battery_percent);
+    });
+
+    // ALMemory.getData(key) -> any, for the keys doctor and the bridge read (docs/mock_robot.md)
+    ServiceDef& memory = new_service("ALMemory", 9);
+    module_version(memory);
+    memory.add(
+        124, "getData", "(s)", "m",
+        [this](ConnState&, A a) -> Value {
+          const std::string key = a[0].as_string();
+          std::lock_guard lock(mutex);
+          if (key == "Device/SubDeviceList/Battery/Charge/Sensor/Value") {
+            return Value::float32(static_cast<float>(battery_percent / 100.0));
+          }
+          if (key == "Device/SubDeviceList/Battery/Current/Sensor/Value") {
+            // Amperes into the battery: positive while charging, negative while discharging.
+            return Value::float32(charging ? 1.6f : -0.9f);
+          }
+          if (key == "BatteryPowerPluggedChanged") return Value::boolean(charging);
+          if (key == "ALMotion/MoveFailed" && move_failed_event) return *move_failed_event;
+          throw MethodFailure("ALMemory::getData: key '" + key + "' not found");
+        },
+        {"key"});
   }
 
   // -------------------------------------------------------------------------------------------
@@ -1029,9 +1194,30 @@ struct MockNaoqiServer::Impl : std::enable_shared_from_this<MockNaoqiServer::Imp
       }
       return;
     }
+    std::string refusal;
+    {
+      std::lock_guard lock(mutex);
+      refusal = move_refusal_locked();
+    }
+    c.commanded_base = true;
+    if (!refusal.empty() && (x != 0.0 || y != 0.0 || theta != 0.0)) {
+      // Not launched: answered at once (a moveTo's Call ends with its move).
+      refuse_move(refusal);
+      if (!post) {
+        MessageHeader r = h;
+        r.type = MessageType::kReply;
+        r.flags = 0;
+        std::vector<std::uint8_t> payload;
+        if (options.dynamic_replies) {
+          payload = encode(Value::dynamic(Value()));
+          r.flags = flags::kDynamicPayload;
+        }
+        send_reply(c, r, std::move(payload), false);
+      }
+      return;
+    }
     end_bounded_move(false);
     const BaseVelocity v = velocity_reaching({x, y, theta}, time_s);
-    c.commanded_base = true;
     robot.command_velocity(v);
     {
       std::lock_guard lock(mutex);
@@ -1411,6 +1597,41 @@ void MockNaoqiServer::set_stall_frames(bool stall) {
 void MockNaoqiServer::set_reply_latency(std::chrono::milliseconds latency) {
   std::lock_guard lock(impl_->mutex);
   impl_->latency = latency;
+}
+
+void MockNaoqiServer::set_move_failure(const std::string& cause) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->move_failure_cause = cause;
+}
+
+void MockNaoqiServer::take_head_back(double head_yaw_rad, bool sticky) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->life_state = "solitary";
+  impl_->awareness_enabled = true;
+  impl_->head_taken = true;
+  impl_->head_taken_sticky = sticky;
+  impl_->tracked_head_yaw_rad = head_yaw_rad;
+  impl_->hold_tracked_head_locked();
+}
+
+void MockNaoqiServer::set_awake(bool awake) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->awake = awake;
+}
+
+void MockNaoqiServer::set_charging(bool charging) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->charging = charging;
+}
+
+void MockNaoqiServer::set_battery_percent(int percent) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->battery_percent = std::clamp(percent, 0, 100);
+}
+
+bool MockNaoqiServer::awake() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->awake;
 }
 
 std::string MockNaoqiServer::autonomous_life_state() const {

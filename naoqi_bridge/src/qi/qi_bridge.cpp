@@ -59,6 +59,7 @@ std::vector<std::string> QiBridgeOptions::validate() const {
   range("head_settle_timeout", head_settle_timeout, 0, 60000);
   range("head_resend_period", head_resend_period, 0, 60000);
   range("odometry_grace", odometry_grace, 0, 1000);
+  range("supervise_period", supervise_period, 0, 60000);
   if (watchdog_period >= watchdog_timeout) {
     errors.push_back("watchdog_period must be shorter than watchdog_timeout");
   }
@@ -81,7 +82,8 @@ std::vector<std::string> QiBridgeOptions::validate() const {
   return errors;
 }
 
-QiBridge::QiBridge(QiBridgeOptions options) : options_(std::move(options)) {
+QiBridge::QiBridge(QiBridgeOptions options)
+    : options_(std::move(options)), supervisor_(options_.supervisor) {
   const auto errors = options_.validate();
   if (!errors.empty()) {
     std::string all;
@@ -184,6 +186,8 @@ void QiBridge::clear_fault() {
   std::lock_guard lock(mutex_);
   needs_operator_ = false;
   fault_reason_.clear();
+  head_lock_lost_ = false;
+  head_lock_detail_.clear();
 }
 
 void QiBridge::open_session() {
@@ -194,8 +198,13 @@ void QiBridge::open_session() {
     auto video = session_->service("ALVideoDevice");
     std::optional<ServiceHandle> life;
     std::optional<ServiceHandle> awareness;
+    std::optional<ServiceHandle> memory;
     try {
       life = session_->service("ALAutonomousLife");
+    } catch (const ServiceNotFound&) {
+    }
+    try {
+      memory = session_->service("ALMemory");
     } catch (const ServiceNotFound&) {
     }
     try {
@@ -211,6 +220,9 @@ void QiBridge::open_session() {
     video_ = std::move(video);
     life_ = std::move(life);
     awareness_ = std::move(awareness);
+    memory_ = std::move(memory);
+    probe_ = Probe();
+    move_failed_call_ = PendingCall();
     inflight_ = PendingCall();
     odometry_inflight_ = PendingCall();
     // Resolved by name and signature like every method; a robot without it gives frames
@@ -493,6 +505,7 @@ HeadLockStatus QiBridge::lock_head(const HeadLockRequest& request) {
     {
       std::lock_guard lock(mutex_);
       head_ = request;
+      head_retaking_ = false;
     }
     last_head_resend_ns_ = mono_ns();
     HeadLockStatus status;
@@ -561,6 +574,10 @@ void QiBridge::move(const BaseVelocity& velocity) {
       last_move_ns_ = mono_ns();
       moving_ = velocity.v_x_m_s != 0.0 || velocity.v_y_m_s != 0.0 || velocity.omega_rad_s != 0.0;
     }
+    {
+      std::lock_guard lock(mutex_);
+      supervisor_.on_command(velocity, last_move_ns_.load());
+    }
     call.get(options_.call_timeout);
     std::lock_guard lock(mutex_);
     ++counters_.moves;
@@ -593,6 +610,7 @@ void QiBridge::send_bounded_move(const ServiceHandle& motion, const BaseVelocity
     std::lock_guard lock(mutex_);
     last_bounded_ = std::move(call);
     ++counters_.moves;
+    supervisor_.on_command(velocity, last_move_ns_.load());
   }
 }
 
@@ -624,6 +642,7 @@ void QiBridge::stop_base(const std::string& why) noexcept {
       std::lock_guard lock(mutex_);
       motion = motion_;
       last_stop_reason_ = why;
+      supervisor_.on_command(BaseVelocity{}, mono_ns());
     }
     if (!motion || !session_->is_connected()) return;
     PendingCall zero;
@@ -695,6 +714,232 @@ void QiBridge::release() noexcept {
     }
   } catch (...) {
   }
+}
+
+void QiBridge::send_probe_locked(std::int64_t now_ns) {
+  Probe p;
+  p.active = true;
+  p.sent_ns = now_ns;
+  p.command = supervisor_.snapshot(now_ns);
+  p.head = head_;
+  // Each read-back only where the robot has the method (a missing one is simply not judged).
+  if (motion_->meta.find("getRobotVelocity", "()")) {
+    p.velocity = session_->call_async(*motion_, "getRobotVelocity", "()", {});
+  }
+  if (motion_->meta.find("moveIsActive", "()")) {
+    p.move_active = session_->call_async(*motion_, "moveIsActive", "()", {});
+  }
+  if (p.head) {
+    if (life_ && options_.disable_autonomous_life && life_->meta.find("getState", "()")) {
+      p.life = session_->call_async(*life_, "getState", "()", {});
+    }
+    if (awareness_ && options_.disable_basic_awareness &&
+        awareness_->meta.find("isEnabled", "()")) {
+      p.awareness = session_->call_async(*awareness_, "isEnabled", "()", {});
+    }
+    p.head_angles = session_->call_async(*motion_, "getAngles", "(mb)",
+                                         {Value::strings({"HeadYaw", "HeadPitch"}),
+                                          Value::boolean(true)});
+  }
+  probe_ = std::move(p);
+  last_probe_ns_ = now_ns;
+}
+
+namespace {
+
+/// A read-back's value, or nullopt when it was not asked or the robot answered an Error.
+std::optional<Value> reply_of(PendingCall& call) {
+  if (!call.valid()) return std::nullopt;
+  try {
+    return call.get(std::chrono::milliseconds(0));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+void QiBridge::judge_probe(Probe& p, RobotSupervision& out) {
+  // Replies are all in (or the probe is judged with what came): read them outside the lock.
+  std::optional<BaseVelocity> measured;
+  if (auto v = reply_of(p.velocity)) {
+    try {
+      const auto& e = v->elements();
+      if (e.size() == 3) {
+        measured = BaseVelocity{e[0].as_double(), e[1].as_double(), e[2].as_double()};
+      }
+    } catch (const std::exception&) {
+    }
+  }
+  std::optional<bool> active;
+  if (auto v = reply_of(p.move_active)) {
+    try {
+      active = v->as_bool();
+    } catch (const std::exception&) {
+    }
+  }
+  MotionSupervisor::HeadReadback head;
+  if (p.head) {
+    if (auto v = reply_of(p.life)) {
+      try {
+        head.life_state = v->as_string();
+      } catch (const std::exception&) {
+      }
+    }
+    if (auto v = reply_of(p.awareness)) {
+      try {
+        head.awareness_enabled = v->as_bool();
+      } catch (const std::exception&) {
+      }
+    }
+    if (auto v = reply_of(p.head_angles)) {
+      try {
+        const auto& e = v->elements();
+        if (e.size() == 2) {
+          head.max_error_rad = std::max(std::fabs(e[0].as_double() - p.head->head_yaw_rad),
+                                        std::fabs(e[1].as_double() - p.head->head_pitch_rad));
+        }
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  std::optional<MotionSupervisor::HeadVerdict> verdict;
+  std::string detail;
+  bool ask_move_failed = false;
+  {
+    std::lock_guard lock(mutex_);
+    ++counters_.supervision_probes;
+    if (measured) {
+      measured_velocity_ = measured;
+      move_active_ = active;
+      const bool was_failing = supervisor_.move_failing();
+      if (auto w = supervisor_.on_motion_readback(p.command, *measured, active)) {
+        out.warnings.push_back(*w);
+      }
+      if (!was_failing && supervisor_.move_failing()) {
+        ++counters_.move_failures;
+        ask_move_failed = memory_ && memory_->meta.find("getData", "(s)");
+      }
+    }
+    if (p.head && head_ && !head_lock_lost_) {
+      verdict = supervisor_.on_head_readback(
+          head, life_.has_value() && options_.disable_autonomous_life,
+          awareness_.has_value() && options_.disable_basic_awareness,
+          p.head->tolerance_rad, detail);
+    }
+  }
+  if (ask_move_failed) {
+    std::lock_guard lock(mutex_);
+    move_failed_call_ =
+        session_->call_async(*memory_, "getData", "(s)", {Value::string("ALMotion/MoveFailed")});
+  }
+  if (!verdict) return;
+  if (*verdict == MotionSupervisor::HeadVerdict::kHolding) {
+    std::lock_guard lock(mutex_);
+    if (head_retaking_) {
+      head_retaking_ = false;
+      out.warnings.push_back("head lock re-established: the head holds its locked angles again");
+    }
+    return;
+  }
+  if (*verdict == MotionSupervisor::HeadVerdict::kLost) {
+    const std::string why = "head lock lost: " + detail + " on " +
+                            std::to_string(options_.supervisor.lost_probes) +
+                            " read-backs in a row, although Autonomous Life and awareness were "
+                            "turned off again and the head angles re-sent";
+    {
+      std::lock_guard lock(mutex_);
+      head_lock_lost_ = true;
+      head_lock_detail_ = why;
+    }
+    latch_fault(why);
+    stop_base(why);
+    return;
+  }
+  // kRetake: the robot took the head (or it drifted): turn the autonomy off again and re-send
+  // the angles, without waiting for the replies.
+  std::lock_guard lock(mutex_);
+  if (!head_retaking_) {
+    head_retaking_ = true;
+    ++counters_.head_retakes;
+    out.warnings.push_back("the robot took the head back (" + detail +
+                           "): turning Autonomous Life and awareness off again and re-sending "
+                           "the head angles");
+  }
+  try {
+    if (life_ && options_.disable_autonomous_life && head.life_state &&
+        *head.life_state != "disabled") {
+      (void)session_->call_async(*life_, "setState", "(s)", {Value::string("disabled")});
+    }
+    if (awareness_ && options_.disable_basic_awareness && head.awareness_enabled &&
+        *head.awareness_enabled) {
+      (void)session_->call_async(*awareness_, "setEnabled", "(b)", {Value::boolean(false)});
+    }
+    const std::vector<float> targets = {static_cast<float>(p.head->head_yaw_rad),
+                                        static_cast<float>(p.head->head_pitch_rad), 0.f, 0.f, 0.f};
+    const auto speed = static_cast<float>(options_.head_max_speed_fraction);
+    (void)session_->call_async(*motion_, "setAngles", "(mmf)",
+                               {Value::strings(kLockedJoints), Value::floats(targets),
+                                Value::float32(speed)});
+  } catch (const std::exception&) {
+    // A lost connection shows in state(); the next read-back judges again.
+  }
+}
+
+RobotSupervision QiBridge::supervise() {
+  RobotSupervision out;
+  if (options_.supervise_period.count() > 0 && connected() && session_->is_connected()) {
+    const std::int64_t now = mono_ns();
+    Probe ready;
+    PendingCall move_failed;
+    {
+      std::lock_guard lock(mutex_);
+      if (probe_.active) {
+        const bool all_in = (!probe_.velocity.valid() || probe_.velocity.ready()) &&
+                            (!probe_.move_active.valid() || probe_.move_active.ready()) &&
+                            (!probe_.life.valid() || probe_.life.ready()) &&
+                            (!probe_.awareness.valid() || probe_.awareness.ready()) &&
+                            (!probe_.head_angles.valid() || probe_.head_angles.ready());
+        const bool overdue =
+            now - probe_.sent_ns > std::chrono::nanoseconds(options_.call_timeout).count();
+        if (all_in || overdue) {
+          ready = std::move(probe_);
+          probe_ = Probe();
+        }
+      }
+      if (move_failed_call_.valid() && move_failed_call_.ready()) {
+        move_failed = std::move(move_failed_call_);
+        move_failed_call_ = PendingCall();
+      }
+    }
+    try {
+      if (ready.active) judge_probe(ready, out);
+      if (auto v = reply_of(move_failed)) {
+        // NAOqi's ALMotion/MoveFailed value: [cause, status, position].
+        const Value& u = v->unwrapped();
+        if ((u.kind() == TypeKind::kList || u.kind() == TypeKind::kTuple) &&
+            !u.elements().empty() && u.elements()[0].unwrapped().kind() == TypeKind::kString) {
+          out.warnings.push_back("ALMotion/MoveFailed on the robot: " +
+                                 u.elements()[0].unwrapped().as_string());
+        }
+      }
+      std::lock_guard lock(mutex_);
+      if (!probe_.active && motion_ &&
+          now - last_probe_ns_ >=
+              std::chrono::nanoseconds(options_.supervise_period).count()) {
+        send_probe_locked(now);
+      }
+    } catch (const std::exception&) {
+      // A lost connection shows in state(); supervision resumes after a reconnect.
+    }
+  }
+  std::lock_guard lock(mutex_);
+  out.head_lock_lost = head_lock_lost_;
+  out.head_lock_detail = head_lock_detail_;
+  out.measured_velocity = measured_velocity_;
+  out.move_active = move_active_;
+  out.move_failing = supervisor_.move_failing();
+  return out;
 }
 
 void QiBridge::watchdog_loop() {

@@ -1,6 +1,12 @@
-// `pepper_app doctor`: checks a robot connection the way a user wants before a demo: reachable,
-// logged in, services present, camera streaming, head lock holding, base accepting commands.
-// One line per check, OK or FAIL with the reason; exit code 0 only when every check passes.
+// `pepper_app doctor`: checks a robot the way an operator wants before a demo: reachable, logged
+// in, services present, the robot's state (NAOqi version, battery and charger, awake or resting,
+// Autonomous Life, external collision protection, odometry), camera streaming, head lock
+// holding, base accepting commands, robot-side deadman. One line per check: OK, WARN (works, with
+// something to know or do) or FAIL (fix before driving), each WARN and FAIL with what to do.
+// Exit code 0 when nothing failed (warnings allowed), 1 when a check failed, 2 for bad options.
+// The robot-state checks read only (they run before the head-lock check, which wakes the robot
+// up and turns Autonomous Life off for its duration); their services and keys are listed in
+// docs/naoqi_bridge.md with the source of each (doctor_robot_state.hpp).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,6 +18,8 @@
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
+#include "commands/doctor_report.hpp"
+#include "commands/doctor_robot_state.hpp"
 #include "session/known_robots.hpp"
 #include "session/robot_connection.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
@@ -25,6 +33,10 @@ namespace {
 namespace qi = pepper::naoqi_bridge::qi;
 namespace nb = pepper::naoqi_bridge;
 using Clock = std::chrono::steady_clock;
+using doctor::classify;
+using doctor::fmt;
+using doctor::Report;
+using doctor::summarize;
 
 struct DoctorArgs {
   std::string robot;
@@ -36,48 +48,13 @@ struct DoctorArgs {
   int timeout_ms = 5000;
 };
 
-class Report {
- public:
-  void ok(const std::string& check, const std::string& msg) { line("OK  ", check, msg); }
-  /// Works, with a limit the operator must know about (not counted as a failure).
-  void warn(const std::string& check, const std::string& msg) { line("WARN", check, msg); }
-  void fail(const std::string& check, const std::string& msg) {
-    line("FAIL", check, msg);
-    ++failures_;
-  }
-  int failures() const { return failures_; }
-
- private:
-  void line(const char* tag, const std::string& check, const std::string& msg) {
-    std::cout << tag << "  " << std::left << std::setw(24) << check << " " << msg << "\n"
-              << std::flush;
-  }
-  int failures_ = 0;
-};
-
-std::string classify(const std::exception& e) {
-  if (dynamic_cast<const qi::AuthenticationError*>(&e)) return std::string("login: ") + e.what();
-  if (dynamic_cast<const qi::TlsError*>(&e)) return std::string("TLS: ") + e.what();
-  if (dynamic_cast<const qi::ConnectError*>(&e)) {
-    return std::string("host unreachable: ") + e.what();
-  }
-  if (dynamic_cast<const qi::ServiceNotFound*>(&e))
-    return std::string("missing service: ") + e.what();
-  if (dynamic_cast<const qi::CallTimeout*>(&e)) return std::string("timeout: ") + e.what();
-  if (dynamic_cast<const qi::ConnectionLost*>(&e))
-    return std::string("connection lost: ") + e.what();
-  return e.what();
-}
-
-std::string fmt(double v, int decimals) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(decimals) << v;
-  return os.str();
-}
-
 struct ServiceCheck {
   const char* name;
   std::vector<std::pair<const char*, const char*>> methods;  // name, parameters signature
+  /// Required services fail the check when missing; the others only limit what a session
+  /// can do (said in `without`).
+  bool required = true;
+  const char* without = "";
 };
 
 int run_doctor(const DoctorArgs& a) {
@@ -131,8 +108,14 @@ int run_doctor(const DoctorArgs& a) {
         {"stopMove", "()"}}},
       {"ALVideoDevice",
        {{"subscribeCamera", "(siiii)"}, {"getImageRemote", "(s)"}, {"unsubscribe", "(s)"}}},
-      {"ALAutonomousLife", {{"getState", "()"}, {"setState", "(s)"}}},
-      {"ALBasicAwareness", {{"isEnabled", "()"}, {"setEnabled", "(b)"}}},
+      {"ALAutonomousLife",
+       {{"getState", "()"}, {"setState", "(s)"}},
+       false,
+       "sessions cannot turn Autonomous Life off: make sure it is disabled on the robot"},
+      {"ALBasicAwareness",
+       {{"isEnabled", "()"}, {"setEnabled", "(b)"}},
+       false,
+       "sessions cannot turn basic awareness off: make sure the robot does not track people"},
   };
   const auto t0 = Clock::now();
   try {
@@ -146,10 +129,13 @@ int run_doctor(const DoctorArgs& a) {
     }
     report.ok("connect", msg);
   } catch (const std::exception& e) {
-    report.fail("connect", classify(e));
+    report.fail("connect", classify(e),
+                "check the URL, that the robot is on and on this network (ping it), and the "
+                "login");
     for (const auto& s : services) report.fail(std::string("service ") + s.name, skipped);
+    for (const char* c : doctor::robot_state_checks()) report.fail(c, skipped);
     for (const char* c : {"camera", "head lock", "base"}) report.fail(c, skipped);
-    return 1;
+    return summarize(report);
   }
   for (const auto& s : services) {
     const std::string check = std::string("service ") + s.name;
@@ -162,13 +148,25 @@ int run_doctor(const DoctorArgs& a) {
       if (missing.empty()) {
         report.ok(check, "present (id " + std::to_string(h.id) + ", " +
                              std::to_string(h.meta.methods.size()) + " methods)");
+      } else if (s.required) {
+        report.fail(check, "present but lacks " + missing + " (unsupported NAOqi version?)",
+                    "use a robot with NAOqi 2.5 or 2.9");
       } else {
-        report.fail(check, "present but lacks " + missing + " (unsupported NAOqi version?)");
+        report.warn(check, "present but lacks " + missing, s.without);
+      }
+    } catch (const qi::ServiceNotFound& e) {
+      if (s.required) {
+        report.fail(check, classify(e), "restart NAOqi on the robot (or reboot it)");
+      } else {
+        report.warn(check, std::string("the robot has no ") + s.name + " service", s.without);
       }
     } catch (const std::exception& e) {
       report.fail(check, classify(e));
     }
   }
+  // The robot's state, read before the head-lock check below changes it (wakeUp, Autonomous
+  // Life off for the duration of the check).
+  doctor::check_robot_state(session, report, std::chrono::milliseconds(a.timeout_ms));
   session.close();
 
   // 2. Camera, head lock and base through the bridge, as a session would use them.
@@ -177,7 +175,7 @@ int run_doctor(const DoctorArgs& a) {
     bridge.connect();
   } catch (const std::exception& e) {
     for (const char* c : {"camera", "head lock", "base"}) report.fail(c, classify(e));
-    return 1;
+    return summarize(report);
   }
   try {
     nb::CameraRequest req;  // VGA grey, 15 fps
@@ -266,9 +264,7 @@ int run_doctor(const DoctorArgs& a) {
   }
   bridge.stop();
   bridge.release();
-  std::cout << (report.failures() == 0 ? "all checks passed\n"
-                                       : std::to_string(report.failures()) + " check(s) failed\n");
-  return report.failures() == 0 ? 0 : 1;
+  return summarize(report);
 }
 
 }  // namespace
@@ -277,11 +273,13 @@ void register_doctor_command(CLI::App& app) {
   auto args = std::make_shared<DoctorArgs>();
   auto* cmd = app.add_subcommand(
       "doctor",
-      "Check a robot connection before a demo: reachability, TLS and login, the NAOqi services "
-      "used, camera streaming rate and frame size, head lock read-back, and a zero-velocity "
-      "move, and whether velocity commands end by themselves on the robot (the robot-side "
-      "deadman). One line per check; exit code 0 only when all pass. tcps:// robots are checked "
-      "against the known-robots file before the password is sent.");
+      "Check a robot before a demo: reachability, TLS and login, the NAOqi services used, the "
+      "robot's state (NAOqi version, battery, charger, awake or resting, Autonomous Life, "
+      "external collision protection, odometry), camera streaming rate and frame size, head lock "
+      "read-back, a zero-velocity move, and whether velocity commands end by themselves on the "
+      "robot (the robot-side deadman). One line per check: OK, WARN or FAIL, with what to do. "
+      "Exit code 0 when no check failed (warnings allowed), 1 when one did. tcps:// robots are "
+      "checked against the known-robots file before the password is sent.");
   cmd->add_option("--robot", args->robot, "Robot URL: tcp://HOST:9559 or tcps://HOST:9503")
       ->required();
   cmd->add_option("--user", args->user,
@@ -299,6 +297,7 @@ void register_doctor_command(CLI::App& app) {
   cmd->footer(
       "Examples:\n"
       "  pepper_app doctor --robot tcp://10.0.0.5:9559\n"
+      "  pepper_app doctor --robot tcp://127.0.0.1:9559 --camera-seconds 1  # a local mock-robot\n"
       "  pepper_app doctor --robot tcps://10.0.0.5:9503 --password-file ~/.pepper_pw  # user nao");
   cmd->callback([args] {
     try {

@@ -2,8 +2,15 @@
 // NAOqi server of naoqi_bridge/qi), until Ctrl-C. See docs/naoqi_bridge.md.
 #include <pthread.h>
 
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
 #include <csignal>
+#include <functional>
 #include <iostream>
+#include <mutex>
+#include <thread>
+#include <vector>
 #include <memory>
 #include <string>
 
@@ -37,6 +44,66 @@ struct MockRobotArgs {
   int max_connections = 64;
   bool legacy_service_info = false;
   bool lockstep = false;
+  // Robot state (docs/mock_robot.md "Robot state")
+  qi::MockRobotState state;
+  bool asleep = false;
+  bool no_collision_protection = false;
+  std::string fail_moves;          ///< cause; every move fails (from fail_moves_after_s)
+  double fail_moves_after_s = 0.0;
+  double take_head_after_s = -1.0;  ///< < 0: never
+  bool take_head_sticky = false;
+  double take_head_yaw_rad = 0.5;
+};
+
+/// Runs the timed robot-state events of the options (a move failure, Autonomous Life taking the
+/// head back) on a thread of its own until stopped.
+class StateEvents {
+ public:
+  StateEvents(qi::MockNaoqiServer& server, const MockRobotArgs& a) {
+    if (a.fail_moves.empty() && a.take_head_after_s < 0) return;
+    thread_ = std::thread([this, &server, a] {
+      struct Due {
+        double at_s;
+        std::function<void()> run;
+      };
+      std::vector<Due> due;
+      if (!a.fail_moves.empty()) {
+        due.push_back(
+            {a.fail_moves_after_s, [&server, a] { server.set_move_failure(a.fail_moves); }});
+      }
+      if (a.take_head_after_s >= 0) {
+        due.push_back({a.take_head_after_s, [&server, a] {
+                         server.take_head_back(a.take_head_yaw_rad, a.take_head_sticky);
+                       }});
+      }
+      std::sort(due.begin(), due.end(),
+                [](const Due& x, const Due& y) { return x.at_s < y.at_s; });
+      const auto t0 = std::chrono::steady_clock::now();
+      for (const auto& d : due) {
+        std::unique_lock lock(mutex_);
+        if (cv_.wait_until(lock, t0 + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                          std::chrono::duration<double>(d.at_s)),
+                           [this] { return quit_; })) {
+          return;
+        }
+        d.run();
+      }
+    });
+  }
+  ~StateEvents() {
+    {
+      std::lock_guard lock(mutex_);
+      quit_ = true;
+    }
+    cv_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool quit_ = false;
+  std::thread thread_;
 };
 
 int run_mock_robot(const MockRobotArgs& a) {
@@ -53,6 +120,9 @@ int run_mock_robot(const MockRobotArgs& a) {
   so.call_log_file = a.log_file;
   so.idle_timeout = std::chrono::milliseconds(static_cast<long>(a.idle_timeout_s * 1000.0));
   so.max_connections = a.max_connections;
+  so.robot_state = a.state;
+  so.robot_state.awake = !a.asleep;
+  so.robot_state.collision_protection = !a.no_collision_protection;
   if (!a.user.empty()) {
     so.user = a.user;
     if (!a.password_file.empty()) {
@@ -94,7 +164,15 @@ int run_mock_robot(const MockRobotArgs& a) {
 
   qi::MockNaoqiServer server(*robot, so);
   server.start();
+  StateEvents events(server, a);
   std::cout << "mock NAOqi serving a simulated Pepper (" << what << ") on " << server.url() << "\n";
+  const auto& rs = so.robot_state;
+  std::cout << "robot state: NAOqi " << rs.naoqi_version << ", battery " << rs.battery_percent
+            << " %" << (rs.charging ? " (charging)" : "") << ", "
+            << (rs.awake ? "awake" : "resting") << ", Autonomous Life " << rs.autonomous_life
+            << ", external collision protection " << (rs.collision_protection ? "on" : "off");
+  for (const auto& m : rs.missing_services) std::cout << ", no " << m;
+  std::cout << "\n";
   if (!server.certificate_sha256().empty()) {
     std::cout << "TLS certificate SHA-256: " << server.certificate_sha256() << "\n";
   }
@@ -164,11 +242,48 @@ void register_mock_robot_command(CLI::App& app) {
                 "time) instead of at the subscribed fps");
   cmd->add_flag("--legacy-service-info", args->legacy_service_info,
                 "Answer NAOqi 2.5's 6-field ServiceInfo instead of libqi 4's 7 fields");
+  cmd->add_option("--naoqi-version", args->state.naoqi_version,
+                  "Robot state: version reported by ALSystem.systemVersion")
+      ->capture_default_str();
+  cmd->add_option("--battery", args->state.battery_percent,
+                  "Robot state: battery charge in percent (ALBattery.getBatteryCharge)")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
+  cmd->add_flag("--charging", args->state.charging,
+                "Robot state: charger plugged (power hatch open): moves are refused");
+  cmd->add_flag("--asleep", args->asleep,
+                "Robot state: resting (ALMotion.robotIsWakeUp false) until a client wakes it up");
+  cmd->add_option("--autonomous-life", args->state.autonomous_life,
+                  "Robot state: Autonomous Life state")
+      ->check(CLI::IsMember({"solitary", "interactive", "disabled", "safeguard"}))
+      ->capture_default_str();
+  cmd->add_flag("--no-collision-protection", args->no_collision_protection,
+                "Robot state: external collision protection of the move turned off");
+  cmd->add_option("--without-service", args->state.missing_services,
+                  "Robot state: leave this service out of the directory (repeatable), e.g. "
+                  "ALBattery");
+  cmd->add_option("--fail-moves", args->fail_moves,
+                  "Simulation: every move fails with this cause (the base stays still and "
+                  "ALMotion/MoveFailed is raised), as external collision protection near an "
+                  "obstacle; from --fail-moves-after-s on");
+  cmd->add_option("--fail-moves-after-s", args->fail_moves_after_s,
+                  "Seconds after start-up when --fail-moves begins")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
+  cmd->add_option("--take-head-after-s", args->take_head_after_s,
+                  "Simulation: this many seconds after start-up Autonomous Life takes the head "
+                  "back (solitary, awareness on, head turned to a tracked person)")
+      ->check(CLI::Range(0.0, 86400.0));
+  cmd->add_flag("--take-head-sticky", args->take_head_sticky,
+                "With --take-head-after-s: Autonomous Life and awareness cannot be turned off "
+                "again, so the head lock cannot be held");
   cmd->footer(
       "Examples:\n"
       "  pepper_app mock-robot --listen tcp://127.0.0.1:9559\n"
       "  pepper_app mock-robot --listen tcp://127.0.0.1:9559 --world worlds/white_corridor.yaml\n"
-      "  PEPPER_PASSWORD=pepper pepper_app mock-robot --listen tcps://127.0.0.1:9503 --user nao");
+      "  PEPPER_PASSWORD=pepper pepper_app mock-robot --listen tcps://127.0.0.1:9503 --user nao\n"
+      "  pepper_app mock-robot --listen tcp://127.0.0.1:9559 --asleep --battery 12 "
+      "--autonomous-life solitary");
   cmd->callback([args] {
     try {
       exit_code() = run_mock_robot(*args);

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "session/recording.hpp"
+#include "session/robot_supervision.hpp"
 #include "session/signals.hpp"
 #include "session/telemetry_json.hpp"
 
@@ -199,6 +200,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         end_with("connection_lost", "connection to the robot lost");
         break;
       }
+      // The robot's own view (executed velocity, head lock): before this frame's command.
+      const SupervisionStep robot_view = supervise_robot(bridge, link);
+      if (robot_view.stop_reason) {
+        end_with("head_lock_lost", *robot_view.stop_reason);
+        break;
+      }
       auto frame = bridge.next_frame(std::chrono::milliseconds(100));
       if (!frame) {
         if (Clock::now() - last_frame_at > std::chrono::milliseconds(options.frame_timeout_ms)) {
@@ -269,6 +276,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                              {"odom", odometry_to_json(frame->odom)},
                              {"command", command_to_json(c)},
                              {"telemetry", telemetry_to_json(t)}};
+      if (!robot_view.telemetry.is_null()) line["robot"] = robot_view.telemetry;
       if (robot.mock) {
         const auto gt = robot.mock->ground_truth();
         s.has_pose = true;

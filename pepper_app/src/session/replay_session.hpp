@@ -9,8 +9,10 @@
 // an exception from the core or the bridge ("error"), Ctrl-C ("interrupted"), the UI's STOP
 // ("ui_stop"), a lost connection ("connection_lost"), the frame cap ("max_frames"), stopped too long
 // after driving ("lost", give_up_lost_s), never localised ("not_localised",
-// give_up_not_localised_s), a collision of the simulated robot ("collision"), or a ReplayMonitor's
-// end. Every way out sends bridge.stop() first.
+// give_up_not_localised_s), a collision of the simulated robot ("collision"), a head lock the
+// robot does not let us hold ("head_lock_lost", RobotBridge::supervise), or a ReplayMonitor's
+// end. Every way out sends bridge.stop() first. Move failures the robot shows (a velocity it does
+// not execute) are reported as "robot_warning" events and in the telemetry's "robot" key.
 // This loop is the only replay loop of the product: `replay`, `demo` and `evaluate` run it (the
 // evaluation adds its ground truth and metrics through a ReplayMonitor).
 // On the mock robot the ground-truth base positions are collected (top view, evaluation). The UI's
@@ -97,6 +99,7 @@ struct ReplaySample {
 struct ReplayResult {
   std::string outcome;  ///< tour_complete, interrupted, ui_stop, frame_timeout, connection_lost,
                         ///< error, max_frames, lost, not_localised, overdue, collision (mock),
+                        ///< head_lock_lost,
                         ///< or a ReplayMonitor's outcome
   std::string detail;   ///< one sentence on why it ended
   std::string error;

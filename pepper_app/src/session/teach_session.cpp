@@ -12,6 +12,7 @@
 #include "session/recording.hpp"
 #include "session/signals.hpp"
 #include "session/taught_path.hpp"
+#include "session/robot_supervision.hpp"
 #include "session/telemetry_json.hpp"
 #include "sim/teach_driver.hpp"
 
@@ -156,6 +157,15 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         }
       }
       if (finish) break;
+
+      // The robot's own view: move failures are reported; a head lock the robot does not let
+      // us hold ends the teach (key images taken with a moving head would mislead the replay).
+      const SupervisionStep robot_view = supervise_robot(bridge, link);
+      for (const auto& w : robot_view.warnings) result.warnings.push_back("robot: " + w);
+      if (robot_view.stop_reason) {
+        stop_base("head_lock_lost");
+        throw std::runtime_error(*robot_view.stop_reason);
+      }
 
       auto frame = bridge.next_frame(std::chrono::milliseconds(100));
       if (!frame) {

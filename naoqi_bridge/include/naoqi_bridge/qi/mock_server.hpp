@@ -5,8 +5,13 @@
 // Serves service 0 (authenticate, optional user/password check), the ServiceDirectory (service
 // 1: service, services, machineId) and ALMotion, ALVideoDevice, ALRobotPosture, ALAutonomousLife,
 // ALBasicAwareness with NAOqi's method names, signatures and uids (PROTOCOL.md section 7), each
-// with its MetaObject. Backing: getImageRemote renders SimRobot::capture() at the subscribed
-// resolution; move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints;
+// with its MetaObject, plus the robot-state services `doctor` reads: ALSystem.systemVersion,
+// ALBattery.getBatteryCharge and ALMemory.getData for the battery keys and ALMotion/MoveFailed
+// (docs/mock_robot.md lists them and their sources). MockRobotState sets the state they report
+// (NAOqi version, battery, charger, awake or resting, Autonomous Life, collision protection, and
+// services left out); the robot-state hooks below change it while clients are connected.
+// Backing: getImageRemote renders SimRobot::capture() at the subscribed resolution;
+// move -> command_velocity; stopMove -> stop_move; setAngles/getAngles -> joints;
 // getRobotPosition(useSensors) -> SimRobot::odometry (true: wheels, false: commands).
 // moveTo(x, y, theta, time) drives the constant twist that reaches the pose in `time`, then
 // stops the base by itself and answers the Call (bounded_move.hpp), like NAOqi's blocking
@@ -38,6 +43,25 @@
 #include "sim/sim_robot.hpp"
 
 namespace pepper::naoqi_bridge::qi {
+
+/// The robot state the mock reports (and acts on), as a real Pepper would show it.
+struct MockRobotState {
+  std::string naoqi_version = "2.5.10.7";  ///< ALSystem.systemVersion and every ALModule.version
+  int battery_percent = 87;                ///< ALBattery.getBatteryCharge, 0..100
+  /// Charger plugged (power hatch open): the battery current reads positive and, as on a Pepper,
+  /// locomotion is refused (the base stays still, ALMotion/MoveFailed is raised).
+  bool charging = false;
+  /// false: resting (motors off, ALMotion.robotIsWakeUp false) until wakeUp; moves then leave
+  /// the base still and raise ALMotion/MoveFailed.
+  bool awake = true;
+  std::string autonomous_life = "solitary";  ///< solitary, interactive, disabled or safeguard
+  bool collision_protection = true;  ///< getExternalCollisionProtectionEnabled("Move"/"All")
+  /// Services the directory does not know (e.g. "ALBattery"), to test clients on robots without
+  /// them. ALMotion and ALVideoDevice can be left out too.
+  std::vector<std::string> missing_services;
+
+  std::vector<std::string> validate() const;
+};
 
 struct MockServerOptions {
   std::string listen_url = "tcp://127.0.0.1:0";  ///< tcp:// or tcps://; port 0 = ephemeral
@@ -74,6 +98,7 @@ struct MockServerOptions {
   std::chrono::milliseconds idle_timeout{60000};
   /// Connections (including TLS handshakes) served at once; more are closed on accept.
   int max_connections = 64;
+  MockRobotState robot_state;
   CodecLimits limits;
 
   std::vector<std::string> validate() const;
@@ -102,10 +127,27 @@ class MockNaoqiServer {
   void set_stall_frames(bool stall);
   void set_reply_latency(std::chrono::milliseconds latency);
 
+  /// Robot-state hooks (tests, `mock-robot` options): what a real robot does by itself.
+  /// A non-empty cause makes every later move/moveTo fail as NAOqi's external collision
+  /// protection does near an obstacle: the Call is answered, the base stays still,
+  /// getRobotVelocity and moveIsActive say so and ALMemory "ALMotion/MoveFailed" holds
+  /// [cause, status 1, getRobotPosition(false)]. "" ends it.
+  void set_move_failure(const std::string& cause);
+  /// Autonomous Life takes the head back, as when it re-enters "solitary" during a session:
+  /// state solitary, ALBasicAwareness enabled, and the head turned to `head_yaw_rad` (a person
+  /// tracked). While awareness stays enabled it keeps the head there against setAngles. With
+  /// `sticky`, setState("disabled") and setEnabled(false) no longer take (something on the robot
+  /// keeps re-enabling them): the head cannot be held.
+  void take_head_back(double head_yaw_rad, bool sticky);
+  void set_awake(bool awake);
+  void set_charging(bool charging);
+  void set_battery_percent(int percent);
+
   /// State of the simulated services (for tests).
   std::string autonomous_life_state() const;
   bool basic_awareness_enabled() const;
   bool external_collision_protection() const;
+  bool awake() const;
   double stiffness(const std::string& joint) const;  ///< 0 when never set
   std::vector<std::string> video_subscribers() const;
 

@@ -33,6 +33,15 @@
 // plain move() velocity after a disconnect, which is why commands carry their own horizon.
 // stop() is callable from any thread at any time and never throws.
 //
+// Supervision (supervise(), called by sessions every loop iteration, never blocking): every
+// `supervise_period` it sends ALMotion.getRobotVelocity and moveIsActive and, while the head is
+// locked, ALAutonomousLife.getState, ALBasicAwareness.isEnabled and getAngles of the head, all
+// asynchronously, and judges the replies on a later call (MotionSupervisor): a velocity the robot
+// does not execute becomes a warning (with ALMemory's ALMotion/MoveFailed cause when the robot
+// has it); a head the robot took back is re-taken (Autonomous Life and awareness off again, the
+// angles re-sent) with a warning; a head that cannot be held stops the base, latches the fault
+// and is reported as head_lock_lost.
+//
 // Threading: as RobotBridge. One watchdog thread, started by connect() and joined by the
 // destructor. The password is never logged; describe() shows URL and user only.
 
@@ -47,6 +56,7 @@
 #include <thread>
 #include <vector>
 
+#include "naoqi_bridge/qi/motion_supervisor.hpp"
 #include "naoqi_bridge/qi/session.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
 
@@ -80,6 +90,9 @@ struct QiBridgeOptions {
   double head_max_speed_fraction = 0.2;  ///< setAngles fractionMaxSpeed, (0, 1]
   std::chrono::milliseconds head_settle_timeout{2000};  ///< lock_head(): wait for read-back
   std::chrono::milliseconds head_resend_period{1000};   ///< re-send head angles; 0 = off
+  /// supervise(): read-back period of the robot's motion and head-lock state; 0 = off.
+  std::chrono::milliseconds supervise_period{500};
+  MotionSupervisorOptions supervisor;
   bool read_odometry = true;  ///< ALMotion.getRobotPosition(true) with each frame (Frame::odom)
   /// How long a frame waits for its odometry reply after the image arrived (normally 0: the
   /// reply is already there); beyond it the frame goes on without odometry.
@@ -104,6 +117,7 @@ class QiBridge : public RobotBridge {
   void release() noexcept override;
   ConnectionState state() const override;
   std::string describe() const override;
+  RobotSupervision supervise() override;
 
   /// Operator action after a fault: re-arms move(). Throws BridgeError when not connected.
   void clear_fault();
@@ -134,6 +148,9 @@ class QiBridge : public RobotBridge {
     std::uint64_t watchdog_stops = 0;  ///< of which triggered by the watchdog
     std::uint64_t frames_without_odometry = 0;  ///< frames returned with Frame::odom empty
     std::uint64_t bounded_move_errors = 0;  ///< moveTo Calls the robot answered with an Error
+    std::uint64_t supervision_probes = 0;   ///< read-backs judged by supervise()
+    std::uint64_t move_failures = 0;        ///< move-failure episodes seen
+    std::uint64_t head_retakes = 0;         ///< head lock re-taken after the robot took it
   };
   Counters counters() const;
   /// Why the last automatic stop happened ("watchdog: ...", "frames stalled ..."), for logs.
@@ -155,6 +172,16 @@ class QiBridge : public RobotBridge {
   void watchdog_loop();
   void send_bounded_move(const ServiceHandle& motion, const BaseVelocity& velocity);
   void reap_bounded_move();
+  /// supervise(): one set of read-back calls in flight and what was commanded when it was sent.
+  struct Probe {
+    bool active = false;
+    std::int64_t sent_ns = 0;
+    MotionSupervisor::CommandSnapshot command;
+    PendingCall velocity, move_active, life, awareness, head_angles;
+    std::optional<HeadLockRequest> head;  ///< the lock in force when sent
+  };
+  void send_probe_locked(std::int64_t now_ns);
+  void judge_probe(Probe& probe, RobotSupervision& out);
   bool connected() const { return state_.load() == ConnectionState::kConnected; }
 
   QiBridgeOptions options_;
@@ -183,6 +210,16 @@ class QiBridge : public RobotBridge {
   Counters counters_;
   bool bounded_moves_ = false;  // ALMotion has moveTo(ffff) and deadman_horizon > 0
   PendingCall last_bounded_;    // the latest moveTo in flight (answered when it ends)
+  std::optional<ServiceHandle> memory_;  // ALMemory, for ALMotion/MoveFailed (optional)
+  MotionSupervisor supervisor_;
+  Probe probe_;
+  std::int64_t last_probe_ns_ = 0;
+  PendingCall move_failed_call_;  // ALMemory.getData("ALMotion/MoveFailed") after a failure
+  std::optional<BaseVelocity> measured_velocity_;
+  std::optional<bool> move_active_;
+  bool head_retaking_ = false;
+  bool head_lock_lost_ = false;
+  std::string head_lock_detail_;
 
   std::mutex motion_send_mutex_;  // orders move/stop sends on the wire
   std::atomic<bool> moving_{false};
