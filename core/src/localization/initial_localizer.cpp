@@ -123,6 +123,28 @@ InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
     verify(order[r]);
   }
   for (const int k : expected) verify(k);
+  // The expected key images are a prior (where the replay starts, or where odometry puts the
+  // robot after a loss). Where one of them has enough verified matches on its own, the robot is
+  // there: a look-alike elsewhere on the tour (the same poster or door further on) must not
+  // win by a few more matches. The rule then runs on the expected images and their neighbours.
+  int best_expected = -1;
+  for (const int k : expected) {
+    if (k >= 0 && k < n && report.counts[k] >= options.rule.min_best_count &&
+        (best_expected < 0 || report.counts[k] > report.counts[best_expected])) {
+      best_expected = k;
+    }
+  }
+  if (best_expected >= 0) {
+    verify(best_expected - 1);
+    verify(best_expected + 1);
+    std::vector<int> near(static_cast<size_t>(n), -1);
+    for (int k = best_expected - 1; k <= best_expected + 1; ++k) {
+      if (k >= 0 && k < n) near[k] = report.counts[k];
+    }
+    report.result = localize_from_counts(near, options.rule);
+    report.from_prior = true;
+    return report;
+  }
   const int best = static_cast<int>(std::max_element(report.counts.begin(), report.counts.end()) -
                                     report.counts.begin());
   verify(best - 1);

@@ -234,6 +234,7 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
 
 void Navigator::reset() {
   state_ = NavState::kNotLocalized;
+  ever_localised_ = false;
   switcher_.reset();
   schedule_.reset();
   has_command_ = false;
@@ -340,12 +341,15 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
   const auto t0 = Clock::now();
   // After a loss, odometry along the taught path says where the robot should be: those key
   // images are verified whatever the appearance vote ranks first.
+  // When the replay starts, the operator has placed the robot at the tour's start (README,
+  // user guide): the first key images are expected there.
   std::vector<int> expected;
   if (odom_ && tracker_.usable()) {
     if (const auto d = tracker_.deviation()) {
       for (int k = d->piece - 1; k <= d->piece + 2; ++k) expected.push_back(k);
     }
   }
+  if (expected.empty() && !ever_localised_) expected = {0, 1, 2};
   const localization::InitialLocalizationReport report =
       localization::localize_in_map(fm, map_, options_.initial, expected);
   tel.localization_ran = true;
@@ -353,6 +357,7 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
   tel.localization_best_count = report.result.best_count;
   tel.localization_verified = report.verified;
   if (report.result.segment) {
+    ever_localised_ = true;
     switcher_.emplace(*report.result.segment, static_cast<int>(map_.key_images.size()),
                       options_.switching);
     // The robot is near the best key image. An odometry estimate carried from before (a loss)

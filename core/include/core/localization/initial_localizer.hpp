@@ -45,12 +45,16 @@ struct InitialLocalizationReport {
   std::vector<int> votes;            ///< prefilter vote per key image
   std::vector<int> counts;           ///< verified n(Ia, Ik), -1 when not verified
   int verified = 0;                  ///< key images verified geometrically
+  bool from_prior = false;           ///< decided among the expected key images (see below)
 };
 
 /// Localises the matcher's current image in `map`. Key-image ids used with the matcher are the
 /// key image indices.
-/// `expected`: key images to verify whatever the vote says (the navigator: where odometry
-/// along the taught path puts the robot after a loss; indices outside the map are ignored).
+/// `expected`: key images to verify whatever the vote says (the navigator: the tour's first key
+/// images when the replay starts, where odometry along the taught path puts the robot after a
+/// loss; indices outside the map are ignored). They are a prior: when one of them reaches the
+/// rule's min_best_count, the decision is made among them and their neighbours, whatever
+/// count a look-alike key image elsewhere reached.
 InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
                                           const memory::VisualMemory& map,
                                           const InitialLocalizerOptions& options = {},

@@ -310,6 +310,9 @@ class Navigator {
   // NaN until measured, reset whenever IN changes (final_ratio_in_: the IN it belongs to).
   double final_best_ratio_ = std::numeric_limits<double>::quiet_NaN();
   int final_ratio_in_ = -1;
+  // False until the first localisation of this replay: the tour's first key images are then
+  // expected (the robot was placed at the start).
+  bool ever_localised_ = false;
   // VNHV, per segment (IN = vnhv_segment_next_): its reconstruction (built when the segment
   // starts; nullopt when that failed: IBVS drives), its metric scale and taught curvature, the
   // deviation filter.
