@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pepper::core::navigator {
 namespace {
@@ -39,12 +40,21 @@ TaughtPathTracker::TaughtPathTracker(const std::vector<std::optional<OdometryPos
     taught_.push_back(*p);
   }
   if (!usable_) taught_.clear();
+  length_to_m_.assign(taught_.size(), 0.0);
+  for (size_t i = 1; i < taught_.size(); ++i) {
+    const double piece_m = std::hypot(taught_[i].x_m - taught_[i - 1].x_m,
+                                      taught_[i].y_m - taught_[i - 1].y_m);
+    const bool spot = piece_in_place(static_cast<int>(i) - 1);
+    length_to_m_[i] = length_to_m_[i - 1] + (spot ? 0.0 : piece_m);
+  }
 }
 
 void TaughtPathTracker::reset() {
   X_.reset();
   last_odom_.reset();
   piece_ = 0;
+  last_s_m_.reset();
+  moved_since_m_ = 0.0;
 }
 
 void TaughtPathTracker::set(const OdometryPose& X_teach_base, const OdometryPose& odom,
@@ -52,10 +62,18 @@ void TaughtPathTracker::set(const OdometryPose& X_teach_base, const OdometryPose
   X_ = X_teach_base;
   last_odom_ = odom;
   piece_ = std::clamp(from_piece, 0, std::max(0, key_count() - 2));
+  last_s_m_.reset();  // placed by vision: the next deviation may project anywhere ahead
+  moved_since_m_ = 0.0;
 }
 
 void TaughtPathTracker::predict(const OdometryPose& odom) {
-  if (X_ && last_odom_) X_ = compose(*X_, between(*last_odom_, odom));
+  if (X_ && last_odom_) {
+    const OdometryPose step = between(*last_odom_, odom);
+    X_ = compose(*X_, step);
+    if (std::isfinite(step.x_m) && std::isfinite(step.y_m)) {
+      moved_since_m_ += std::hypot(step.x_m, step.y_m);
+    }
+  }
   last_odom_ = odom;
 }
 
@@ -67,23 +85,34 @@ std::pair<double, double> TaughtPathTracker::correct(const OdometryPose& X_fix, 
   const double dx = X_fix.x_m - X_->x_m, dy = X_fix.y_m - X_->y_m;
   const double dyaw = wrap(X_fix.yaw_rad - X_->yaw_rad);
   const std::pair<double, double> error{std::hypot(dx, dy), std::abs(dyaw)};
+  moved_since_m_ += gain * error.first;
   X_ = OdometryPose{X_->x_m + gain * dx, X_->y_m + gain * dy, wrap(X_->yaw_rad + gain * dyaw)};
   return error;
 }
 
-bool TaughtPathTracker::piece_in_place(int i) const {
+bool TaughtPathTracker::piece_short(int i) const {
   const OdometryPose& a = taught_[static_cast<size_t>(i)];
   const OdometryPose& b = taught_[static_cast<size_t>(i) + 1];
   return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) < kInPlaceLengthM;
 }
 
+bool TaughtPathTracker::piece_in_place(int i) const {
+  if (!piece_short(i)) return false;
+  const OdometryPose& a = taught_[static_cast<size_t>(i)];
+  const OdometryPose& b = taught_[static_cast<size_t>(i) + 1];
+  // A short piece of an arc (key images a few centimetres apart on a feature-poor curve) is a
+  // chord, not a turn on the spot: its turning radius is that of the arc.
+  const double turn = std::abs(wrap(b.yaw_rad - a.yaw_rad));
+  return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) < kInPlaceMaxRadiusM * turn;
+}
+
 double TaughtPathTracker::fraction_on(int i) const {
   const OdometryPose& a = taught_[static_cast<size_t>(i)];
   const OdometryPose& b = taught_[static_cast<size_t>(i) + 1];
-  if (piece_in_place(i)) {
+  if (piece_short(i)) {
     const double turn = wrap(b.yaw_rad - a.yaw_rad);
-    if (std::abs(turn) < kNoTurnRad) return 1.0;
-    return wrap(X_->yaw_rad - a.yaw_rad) / turn;
+    if (std::abs(turn) < kNoTurnRad) return 1.0;  // two key images at one pose
+    if (piece_in_place(i)) return wrap(X_->yaw_rad - a.yaw_rad) / turn;
   }
   const double ux = b.x_m - a.x_m, uy = b.y_m - a.y_m;
   return ((X_->x_m - a.x_m) * ux + (X_->y_m - a.y_m) * uy) / (ux * ux + uy * uy);
@@ -91,16 +120,22 @@ double TaughtPathTracker::fraction_on(int i) const {
 
 void TaughtPathTracker::advance_to(int piece) {
   piece_ = std::max(piece_, std::min(piece, std::max(0, key_count() - 2)));
+  if (last_s_m_ && usable_) last_s_m_ = std::max(*last_s_m_, length_to_m_[piece_]);
 }
 
 std::optional<PathDeviation> TaughtPathTracker::deviation() {
   if (!usable_ || !X_) return std::nullopt;
   const int last_piece = key_count() - 2;
   double f = fraction_on(piece_);
-  while (f >= 1.0 && piece_ < last_piece) {
+  const double reach_m = last_s_m_ ? *last_s_m_ + moved_since_m_ + kAdvanceSlackM
+                                   : std::numeric_limits<double>::infinity();
+  while (f >= 1.0 && piece_ < last_piece && length_to_m_[piece_ + 1] <= reach_m) {
     ++piece_;
     f = fraction_on(piece_);
   }
+  const double piece_m = length_to_m_[piece_ + 1] - length_to_m_[piece_];
+  last_s_m_ = std::min(length_to_m_[piece_] + std::clamp(f, 0.0, 1.0) * piece_m, reach_m);
+  moved_since_m_ = 0.0;
   const OdometryPose& a = taught_[static_cast<size_t>(piece_)];
   const OdometryPose& b = taught_[static_cast<size_t>(piece_) + 1];
   const double turn = wrap(b.yaw_rad - a.yaw_rad);

@@ -124,3 +124,38 @@ TEST(TaughtPathTracker, CurvatureOfAnArcPiece) {
 
 }  // namespace
 }  // namespace pepper::core::navigator
+
+namespace pepper::core::navigator {
+namespace {
+
+// Key images a few centimetres apart on a 0.9 m arc (a feature-poor curve, as taught in a
+// generated room): each piece is a chord, not a turn on the spot, and a robot that turned on
+// the spot ahead of the path, or drifted, does not skip along it.
+TEST(TaughtPathTracker, DenseArcChordsAreNotSkippedByHeadingOrDrift) {
+  constexpr double kRadiusM = 0.9, kChordM = 0.025;
+  Poses arc;
+  for (int i = 0; i <= 60; ++i) {
+    const double phi = i * kChordM / kRadiusM;
+    arc.push_back(OdometryPose{kRadiusM * std::sin(phi), kRadiusM * (1 - std::cos(phi)), phi});
+  }
+  TaughtPathTracker t(arc);
+  const OdometryPose start{0.0, 0.0, 0.0};
+  t.set(*arc[0], start, 0);
+  ASSERT_TRUE(t.deviation().has_value());
+  // The robot turns 0.4 rad on the spot (the heading of key image 14): it has not moved along.
+  t.predict({0.0, 0.0, 0.4});
+  const auto turned = t.deviation();
+  ASSERT_TRUE(turned.has_value());
+  EXPECT_FALSE(turned->in_place);
+  EXPECT_LT(turned->progress, 1.0 + TaughtPathTracker::kAdvanceSlackM / kChordM);
+  // Odometry then moves the estimate 0.3 m straight ahead of it (drift, a cut corner): the
+  // progress runs at most that far along the arc, plus the slack.
+  t.predict(compose({0.0, 0.0, 0.4}, {0.3, 0.0, 0.0}));
+  const auto ahead = t.deviation();
+  ASSERT_TRUE(ahead.has_value());
+  EXPECT_LE(ahead->progress, turned->progress + (0.3 + TaughtPathTracker::kAdvanceSlackM) / kChordM + 1);
+  EXPECT_GT(ahead->progress, turned->progress);
+}
+
+}  // namespace
+}  // namespace pepper::core::navigator

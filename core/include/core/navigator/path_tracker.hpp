@@ -5,7 +5,10 @@
 //
 // The taught path is the polyline through the key images' odometry poses (KeyImage::odom, the
 // teach run's odometry frame): piece i joins key image i to i + 1. A piece shorter than
-// kInPlaceLengthM whose heading changes is a turn on the spot.
+// kInPlaceLengthM whose heading changes with a turning radius below kInPlaceMaxRadiusM is a turn
+// on the spot; a short piece of a wider arc is a chord, followed by its projection like any
+// other. (A chord taken for a turn on the spot was followed by heading: a robot a little ahead
+// in heading skipped a dozen of them at once.)
 //
 // The estimate X (T_teach_base, the robot's pose in the teach run's odometry frame) moves with
 // the replay's odometry: X <- X (+) (O_prev^-1 (+) O_now), which needs no alignment of the two
@@ -16,7 +19,13 @@
 // Progress is a key-image coordinate u = i + f on piece i (f in [0, 1]: the projection along a
 // straight piece, or the fraction of the heading change done on a turn on the spot); "IN
 // passed" is u >= IN. The piece only moves forward (from the segment's IP), so a wrong
-// projection cannot send the robot back along the tour.
+// projection cannot send the robot back along the tour. Nor can it send it far ahead: the
+// progress advances along the path by at most the distance the estimate moved since the last
+// deviation (odometry and fixes) plus kAdvanceSlackM. Why: where the teach took key images a
+// few centimetres apart (feature-poor arcs), a few centimetres of drift put the estimate past
+// the end of every short chord in turn; in a generated room (`world generate --seed 7`) the
+// progress jumped 12 key images (0.6 m of arc) in one frame and the replay steered to a piece of
+// the turn it had not reached.
 //
 // Frames and signs: docs/conventions.md (x forward, y left, yaw counter-clockwise). Pure and
 // deterministic; not thread-safe.
@@ -48,6 +57,12 @@ class TaughtPathTracker {
  public:
   /// Pieces shorter than this are turns on the spot (m).
   static constexpr double kInPlaceLengthM = 0.03;
+  /// Progress may run ahead of the estimate's own motion by this much (m): the projection of a
+  /// point beside a straight piece moves a little faster than the point near its ends.
+  static constexpr double kAdvanceSlackM = 0.1;
+  /// A short piece is a turn on the spot when its turning radius (length / turn) is below this
+  /// (m); a short piece of a wider arc is a chord of it.
+  static constexpr double kInPlaceMaxRadiusM = 0.1;
 
   /// `taught`: every key image's odometry pose, in tour order. usable() is false when any is
   /// missing or there are fewer than 2.
@@ -77,6 +92,7 @@ class TaughtPathTracker {
   const OdometryPose& taught(int i) const { return taught_.at(static_cast<size_t>(i)); }
 
  private:
+  bool piece_short(int i) const;  ///< shorter than kInPlaceLengthM
   bool piece_in_place(int i) const;
   /// Fraction along piece i of the current estimate (may lie outside [0, 1]).
   double fraction_on(int i) const;
@@ -86,6 +102,11 @@ class TaughtPathTracker {
   std::optional<OdometryPose> X_;
   std::optional<OdometryPose> last_odom_;
   int piece_ = 0;
+  /// Path length (m) from key image 0 to key image i (turns on the spot add nothing).
+  std::vector<double> length_to_m_;
+  /// Path coordinate of the last deviation (m); nullopt: no bound (after set/reset).
+  std::optional<double> last_s_m_;
+  double moved_since_m_ = 0.0;  ///< distance the estimate moved since then
 };
 
 }  // namespace pepper::core::navigator
