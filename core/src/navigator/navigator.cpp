@@ -235,6 +235,7 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
 void Navigator::reset() {
   state_ = NavState::kNotLocalized;
   ever_localised_ = false;
+  final_fix_.reset();
   switcher_.reset();
   schedule_.reset();
   has_command_ = false;
@@ -568,6 +569,9 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       const OdometryPose in_next{fix->pose.x_m * vnhv_m_per_unit_,
                                  fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
       fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), kFixGain);
+      if (seg.next + 1 == static_cast<int>(map_.key_images.size())) {
+        final_fix_.emplace(in_next, tel.t_ns);
+      }
       odom_since_fix_m_ = 0.0;
       if (drift_report_pending_) {
         // The first fix after a blind stretch: how far the odometry had drifted.
@@ -751,6 +755,21 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
   return omega;
 }
 
+void Navigator::report_arrival(int64_t t_ns, Telemetry& tel) const {
+  std::optional<OdometryPose> at;
+  if (final_fix_ && t_ns - final_fix_->second <= kArrivalFixMaxAgeNs) {
+    at = final_fix_->first;
+    tel.arrival_source = Telemetry::ArrivalSource::kVision;
+  } else if (tracker_.usable() && tracker_.estimate()) {
+    at = between(tracker_.taught(tracker_.key_count() - 1), *tracker_.estimate());
+    tel.arrival_source = Telemetry::ArrivalSource::kOdometry;
+  }
+  if (!at) return;
+  tel.arrival_along_m = at->x_m;
+  tel.arrival_lateral_m = at->y_m;
+  tel.arrival_heading_rad = at->yaw_rad;
+}
+
 Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double> demand,
                         Telemetry& tel) {
   const NavState before = state_;
@@ -758,6 +777,7 @@ Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double>
   switch (t.action) {
     case Action::kStopTourComplete:
       schedule_.reset();
+      report_arrival(t_ns, tel);
       return stop_command(StopReason::kTourComplete);
     case Action::kStopOverdue:
       schedule_.reset();

@@ -119,6 +119,8 @@ int run_demo(const DemoArgs& args) {
     ro.max_frames = 3 * taught.frames_recorded + 300;
     ro.give_up_lost_s = config.replay.give_up_lost_s;
     ro.give_up_not_localised_s = config.replay.give_up_not_localised_s;
+    ro.arrival_tolerance_m = config.replay.arrival_tolerance_m;
+    ro.arrival_tolerance_rad = config.replay.arrival_tolerance_rad;
     if (ui) ro.pace_hz = 2.0 * config.robot.camera_fps;
     const ReplayResult replayed =
         run_replay_session(replay_robot, core::memory::load_map(map_dir), ro, link);
@@ -166,11 +168,16 @@ int run_demo(const DemoArgs& args) {
     table.rows = {
         {"success (end of tour reached)", replayed.tour_complete ? "yes" : "no"},
         {"replay outcome", replayed.outcome},
+        {"arrival (the replay's own estimate)",
+         replayed.tour_complete ? replayed.arrival.verdict + ", " +
+                                      fmt(replayed.arrival.offset_m * 100, 1) + " cm from " +
+                                      replayed.arrival.source
+                                : std::string("-")},
         {"taught distance", fmt(taught.distance_m, 2) + " m"},
         {"key images", std::to_string(taught.key_images)},
         {"lateral deviation RMS (after 1 m)", fmt(dev.rms_m * 100, 1) + " cm"},
         {"lateral deviation max (after 1 m)", fmt(dev.max_m * 100, 1) + " cm"},
-        {"final position error", fmt(final_error_m * 100, 1) + " cm"},
+        {"final position error (ground truth)", fmt(final_error_m * 100, 1) + " cm"},
         {"replay start", "x " + fmt(start.x_m, 2) + " m, y " + fmt(start.y_m, 2) + " m, yaw " +
                              fmt(start.yaw_rad * 180 / M_PI, 1) + " deg"},
         {"frames (teach / replay)",

@@ -101,6 +101,8 @@ int run_evaluate(const EvaluateArgs& a) {
     o.head.head_pitch_rad = config.robot.head_pitch_rad;
     o.give_up_lost_s = config.replay.give_up_lost_s;
     o.give_up_not_localised_s = config.replay.give_up_not_localised_s;
+    o.arrival_tolerance_m = config.replay.arrival_tolerance_m;
+    o.arrival_tolerance_rad = config.replay.arrival_tolerance_rad;
   } catch (const std::exception& e) {
     std::cerr << "pepper_app evaluate: " << e.what() << "\n";
     return 2;

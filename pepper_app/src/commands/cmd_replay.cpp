@@ -83,6 +83,8 @@ int run_replay(const ReplayArgs& a) {
     o.max_frames = a.max_frames;
     o.give_up_lost_s = config.replay.give_up_lost_s;
     o.give_up_not_localised_s = config.replay.give_up_not_localised_s;
+    o.arrival_tolerance_m = config.replay.arrival_tolerance_m;
+    o.arrival_tolerance_rad = config.replay.arrival_tolerance_rad;
     o.telemetry_jsonl = a.json_out;
     o.record_dir = a.record;
     o.wait_for_start = a.wait_start;

@@ -62,6 +62,10 @@ struct ReplayConfig {
   /// Not localised this long after the first frame: the replay ends as "not_localised" with the
   /// best candidate key image and advice. 0 = wait until the operator stops it.
   double give_up_not_localised_s = 10.0;
+  /// End of the tour: "arrived" when the estimated offset from the final key image is within
+  /// these, else "not aligned" (m, rad).
+  double arrival_tolerance_m = 0.15;
+  double arrival_tolerance_rad = 0.1;
 };
 
 struct UiConfig {

@@ -701,6 +701,13 @@ std::vector<Parameter> build_table() {
     row("replay.give_up_not_localised_s",
         replay, &ReplayConfig::give_up_not_localised_s, "s", "0 (never) or (0, 3600]",
         "not localised this long: the replay ends as not_localised"),
+    row("replay.arrival_tolerance_m",
+        replay, &ReplayConfig::arrival_tolerance_m, "m", "(0, 2]",
+        "end of tour: arrived when the estimated offset from the final key image is within this "
+        "(else not aligned)"),
+    row("replay.arrival_tolerance_rad",
+        replay, &ReplayConfig::arrival_tolerance_rad, "rad", "(0, 1]",
+        "end of tour: arrived when the estimated heading error is within this"),
 
     // ui: UiConfig
     row("ui.port",

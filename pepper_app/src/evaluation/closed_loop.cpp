@@ -343,6 +343,8 @@ ReplaySessionOptions replay_session_options(const EvaluationOptions& options) {
   so.navigator.features = options.features;
   so.give_up_lost_s = options.give_up_lost_s;
   so.give_up_not_localised_s = options.give_up_not_localised_s;
+  so.arrival_tolerance_m = options.arrival_tolerance_m;
+  so.arrival_tolerance_rad = options.arrival_tolerance_rad;
   return so;
 }
 
@@ -386,6 +388,9 @@ RunResult replay_run(const TeachResult& teach,
   const ReplayResult replayed = run_replay_session(robot, teach.map, so, link);
   r.tour_complete = replayed.tour_complete;
   if (replayed.tour_complete) {
+    r.arrival_verdict = replayed.arrival.verdict;
+    r.arrival_source = replayed.arrival.source;
+    if (replayed.arrival.verdict != "unknown") r.arrival_offset_m = replayed.arrival.offset_m;
     monitor.settle();
   } else {
     r.outcome = replayed.outcome;
@@ -439,7 +444,8 @@ RunResult replay_run(const TeachResult& teach,
   return r;
 }
 
-Summary summarize(const std::vector<RunResult>& runs, int key_images, double taught_length_m) {
+Summary summarize(const std::vector<RunResult>& runs, int key_images, double taught_length_m,
+                  double arrival_tolerance_m) {
   Summary s;
   s.runs = static_cast<int>(runs.size());
   std::vector<double> rmss, errors, rates, steps;
@@ -453,6 +459,11 @@ Summary summarize(const std::vector<RunResult>& runs, int key_images, double tau
     if (std::isfinite(r.lateral_rms_m)) rmss.push_back(r.lateral_rms_m);
     if (std::isfinite(r.lateral_max_m)) s.lateral_max_m = std::max(s.lateral_max_m, r.lateral_max_m);
     errors.push_back(r.final_error_m);
+    if (!r.arrival_verdict.empty()) {
+      ++s.arrival_judged;
+      const bool there = r.final_error_m <= arrival_tolerance_m;
+      s.arrival_agreed += (r.arrival_verdict == "arrived") == there ? 1 : 0;
+    }
     if (std::isfinite(r.omega_rate_rms_rad_s2)) rates.push_back(r.omega_rate_rms_rad_s2);
     for (const RunSample& smp : r.samples) {
       if (std::isfinite(smp.step_ms)) steps.push_back(smp.step_ms);
@@ -524,7 +535,8 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
     }
     ev.runs.push_back(std::move(r));
   }
-  ev.summary = summarize(ev.runs, ev.key_images, ev.taught_length_m);
+  ev.summary =
+      summarize(ev.runs, ev.key_images, ev.taught_length_m, options.arrival_tolerance_m);
   return ev;
 }
 

@@ -76,6 +76,9 @@ struct EvaluationOptions {
   /// replay.give_up_not_localised_s; `evaluate` takes them from the configuration). > 0.
   double give_up_lost_s = 10.0;
   double give_up_not_localised_s = 10.0;
+  /// replay.arrival_tolerance_m / _rad (the replay's "arrived" verdict).
+  double arrival_tolerance_m = 0.15;
+  double arrival_tolerance_rad = 0.1;
   double divergence_m = 1.0;        ///< |lateral| beyond this ends the run (failure)
   /// Time limit per run: time_limit_factor x (taught path length / 0.08 m/s) + 20 s.
   double time_limit_factor = 1.5;
@@ -133,6 +136,12 @@ struct RunResult {
   double converged_from_m = -1.0;  ///< travelled distance where the converged part starts
   double first_under_5cm_m = -1.0;
   double final_error_m = 0.0;  ///< final base position to the taught end
+  /// The replay's own arrival verdict at the end of the tour (ReplayResult::arrival; "" when the
+  /// tour was not completed) and its estimated offset from the final key image, m (NaN: none),
+  /// to compare with final_error_m.
+  std::string arrival_verdict;
+  std::string arrival_source;
+  double arrival_offset_m = std::numeric_limits<double>::quiet_NaN();
   double omega_rate_rms_rad_s2 = 0.0;
   double step_ms_median = 0.0, step_ms_p95 = 0.0;
   int frames = 0;
@@ -164,6 +173,10 @@ struct Summary {
   double key_images_per_m = 0.0;
   double converged_from_max_m = 0.0;   ///< max over runs of converged_from_m (NaN if one never did)
   double omega_rate_rms_rad_s2 = 0.0;  ///< mean over runs
+  /// Runs that completed the tour, and those whose arrival verdict agreed with the ground truth
+  /// (arrived and final_error_m <= arrival tolerance, or not aligned / unknown and beyond it).
+  int arrival_judged = 0;
+  int arrival_agreed = 0;
   double step_ms_median = 0.0;   ///< over all frames of all runs
   double step_ms_p95 = 0.0;
 };
@@ -221,7 +234,9 @@ RunResult replay_run(const TeachResult& teach,
 Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::World>& world,
                     const EvaluationOptions& options, const ProgressFn& progress = {});
 
-Summary summarize(const std::vector<RunResult>& runs, int key_images, double taught_length_m);
+/// `arrival_tolerance_m`: the replay's arrival tolerance, to judge its verdicts by ground truth.
+Summary summarize(const std::vector<RunResult>& runs, int key_images, double taught_length_m,
+                  double arrival_tolerance_m = 0.15);
 
 const char* feature_label(core::control::FeatureMode mode);
 

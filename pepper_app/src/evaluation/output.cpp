@@ -36,6 +36,8 @@ json summary_json(const Summary& s) {
           {"key_images_per_m", num(s.key_images_per_m)},
           {"converged_from_max_m", num(s.converged_from_max_m)},
           {"omega_rate_rms_rad_s2", num(s.omega_rate_rms_rad_s2)},
+          {"arrival_judged", s.arrival_judged},
+          {"arrival_agreed", s.arrival_agreed},
           {"step_ms_median", num(s.step_ms_median)},
           {"step_ms_p95", num(s.step_ms_p95)}};
 }
@@ -62,6 +64,9 @@ json run_json(const RunResult& r) {
           {"converged_from_m", num(r.converged_from_m)},
           {"first_under_5cm_m", num(r.first_under_5cm_m)},
           {"final_error_m", num(r.final_error_m)},
+          {"arrival", {{"verdict", r.arrival_verdict},
+                       {"source", r.arrival_source},
+                       {"offset_m", num(r.arrival_offset_m)}}},
           {"omega_rate_rms_rad_s2", num(r.omega_rate_rms_rad_s2)},
           {"step_ms_median", num(r.step_ms_median)},
           {"step_ms_p95", num(r.step_ms_p95)},
@@ -144,6 +149,13 @@ std::string runs_table(const Evaluation& e) {
        << pad(fmt("%.1f", 100 * r.final_error_m), 11) << pad(fmt("%.2f", r.omega_rate_rms_rad_s2), 8)
        << pad(fmt("%.1f", r.step_ms_median), 9) << pad(fmt("%.1f", r.step_ms_p95), 6);
     if (r.light_factor != 0.0) os << " light x" << fmt("%.2f", r.light_factor);
+    if (!r.arrival_verdict.empty()) {
+      os << " " << r.arrival_verdict;
+      if (std::isfinite(r.arrival_offset_m)) {
+        os << " (est. " << fmt("%.1f", 100 * r.arrival_offset_m) << " cm, " << r.arrival_source
+           << ")";
+      }
+    }
     if (!r.detail.empty()) os << " " << r.detail;
     os << "\n";
   }

@@ -28,6 +28,8 @@ std::vector<std::string> ReplaySessionOptions::validate() const {
   if (!(pace_hz >= 0)) e.push_back("pace_hz must be >= 0");
   if (!(give_up_lost_s >= 0)) e.push_back("give_up_lost_s must be >= 0");
   if (!(give_up_not_localised_s >= 0)) e.push_back("give_up_not_localised_s must be >= 0");
+  if (!(arrival_tolerance_m > 0)) e.push_back("arrival_tolerance_m must be > 0");
+  if (!(arrival_tolerance_rad > 0)) e.push_back("arrival_tolerance_rad must be > 0");
   for (const auto& m : navigator.validate()) e.push_back("navigator: " + m);
   return e;
 }
@@ -92,6 +94,41 @@ std::string replay_state_name(nav::NavState s) {
     case nav::NavState::kOverdue: return "stopped";
     default: return "running";
   }
+}
+
+}  // namespace
+
+Arrival judge_arrival(const nav::Telemetry& t, double tolerance_m, double tolerance_rad) {
+  Arrival a;
+  if (t.arrival_source == nav::Telemetry::ArrivalSource::kNone || !std::isfinite(t.arrival_along_m) ||
+      !std::isfinite(t.arrival_lateral_m) || !std::isfinite(t.arrival_heading_rad)) {
+    return a;
+  }
+  a.source = t.arrival_source == nav::Telemetry::ArrivalSource::kVision ? "vision" : "odometry";
+  a.along_m = t.arrival_along_m;
+  a.lateral_m = t.arrival_lateral_m;
+  a.heading_rad = t.arrival_heading_rad;
+  a.offset_m = std::hypot(a.along_m, a.lateral_m);
+  a.verdict = a.offset_m <= tolerance_m && std::abs(a.heading_rad) <= tolerance_rad
+                  ? "arrived"
+                  : "not_aligned";
+  return a;
+}
+
+namespace {
+
+std::string arrival_detail(const Arrival& a) {
+  if (a.verdict == "unknown") {
+    return "end of tour reached (no estimate of the final offset: check the position by eye)";
+  }
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "%.0f cm %s, %.0f cm %s, heading %+.1f deg (from %s)",
+                100 * std::abs(a.along_m), a.along_m >= 0 ? "past" : "short",
+                100 * std::abs(a.lateral_m), a.lateral_m >= 0 ? "left" : "right",
+                a.heading_rad * 180 / M_PI, a.source.c_str());
+  if (a.verdict == "arrived") return std::string("arrived at the final key image: ") + buf;
+  return std::string("reached the last key image but not aligned with it: ") + buf +
+         "; check the view at the end of the tour";
 }
 
 }  // namespace
@@ -333,7 +370,9 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (t.state == nav::NavState::kTourComplete ||
           (c.stop && c.reason == nav::StopReason::kTourComplete)) {
         result.tour_complete = true;
-        end_with("tour_complete", "end of tour reached");
+        result.arrival =
+            judge_arrival(t, options.arrival_tolerance_m, options.arrival_tolerance_rad);
+        end_with("tour_complete", arrival_detail(result.arrival));
         link.publish_state({{"replay", {{"state", "finished"},
                                         {"key_index", t.in},
                                         {"key_count", result.key_image_count}}}});
@@ -384,8 +423,18 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     link.publish_state({{"stop_reason", std::string("error: ") + e.what()}});
   }
   bridge.release();
+  nlohmann::json arrival = nullptr;
+  if (result.tour_complete) {
+    arrival = {{"verdict", result.arrival.verdict},
+               {"source", result.arrival.source},
+               {"along_m", result.arrival.along_m},
+               {"lateral_m", result.arrival.lateral_m},
+               {"heading_rad", result.arrival.heading_rad},
+               {"offset_m", result.arrival.offset_m}};
+  }
   link.event({{"event", "replay_done"},
               {"outcome", result.outcome},
+              {"arrival", arrival},
               {"error", result.error},
               {"frames", result.frames},
               {"max_key_reached", result.max_key_reached},

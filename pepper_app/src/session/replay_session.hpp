@@ -74,6 +74,11 @@ struct ReplaySessionOptions {
   /// > 0: end ("not_localised") when the first localisation has not succeeded after this long
   /// (frame time since the first frame); 0 = wait until stopped by the operator.
   double give_up_not_localised_s = 0.0;
+  /// At the end of the tour the robot "arrived" when its estimated offset from the final key
+  /// image's taught pose is within these (m, rad); otherwise it reached the last key image "not
+  /// aligned" (docs/user_guide.md, "How a replay ends"). > 0.
+  double arrival_tolerance_m = 0.15;
+  double arrival_tolerance_rad = 0.1;
   /// Not owned; may be null. See ReplayMonitor.
   ReplayMonitor* monitor = nullptr;
   std::string config_json = "{}";
@@ -96,6 +101,21 @@ struct ReplaySample {
   double x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;  ///< mock ground truth
 };
 
+/// How the robot stands at the end of the tour, from the navigator's own estimate
+/// (Telemetry::arrival_*): no ground truth is needed, so a real Pepper reports it too.
+struct Arrival {
+  std::string verdict = "unknown";  ///< arrived, not_aligned, unknown (no estimate)
+  std::string source = "none";      ///< vision (a VNHV fix on the final segment), odometry, none
+  double along_m = 0.0;    ///< > 0: past the final key image
+  double lateral_m = 0.0;  ///< > 0: left of it
+  double heading_rad = 0.0;
+  double offset_m = 0.0;   ///< hypot(along, lateral)
+};
+
+/// The verdict for an estimate and the tolerances (pure; tested).
+Arrival judge_arrival(const core::navigator::Telemetry& final_frame, double tolerance_m,
+                      double tolerance_rad);
+
 struct ReplayResult {
   std::string outcome;  ///< tour_complete, interrupted, ui_stop, frame_timeout, connection_lost,
                         ///< error, max_frames, lost, not_localised, overdue, collision (mock),
@@ -107,6 +127,7 @@ struct ReplayResult {
   int key_image_count = 0;
   int max_key_reached = -1;
   bool tour_complete = false;
+  Arrival arrival;  ///< meaningful when tour_complete
   std::vector<ReplaySample> samples;
 };
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <optional>
 
@@ -131,6 +132,33 @@ TEST(HandTaughtTour, TurnsOnTheSpotAreFollowedToTheEnd) {
   EXPECT_LT(error_m, 0.15) << "replay ended at (" << end.x_m << ", " << end.y_m << "), taught end ("
                            << taught_end.x_m << ", " << taught_end.y_m << ")";
   EXPECT_LT(heading_error_rad, 0.1);
+  // The replay's own verdict (no ground truth) agrees: arrived, with an estimated offset near
+  // the true one.
+  EXPECT_EQ(result.arrival.verdict, "arrived") << result.detail;
+  EXPECT_NE(result.arrival.source, "none");
+  EXPECT_NEAR(result.arrival.offset_m, error_m, 0.1) << result.detail;
+  RecordProperty("estimated_end_offset_mm", static_cast<int>(std::lround(1000 * result.arrival.offset_m)));
+}
+
+TEST(ArrivalVerdict, WithinBothTolerancesIsArrivedElseNotAlignedOrUnknown) {
+  core::navigator::Telemetry t;
+  EXPECT_EQ(judge_arrival(t, 0.15, 0.1).verdict, "unknown");  // no estimate
+  t.arrival_source = core::navigator::Telemetry::ArrivalSource::kVision;
+  t.arrival_along_m = -0.09;
+  t.arrival_lateral_m = 0.12;
+  t.arrival_heading_rad = 0.05;
+  Arrival a = judge_arrival(t, 0.16, 0.1);
+  EXPECT_EQ(a.verdict, "arrived");
+  EXPECT_EQ(a.source, "vision");
+  EXPECT_NEAR(a.offset_m, 0.15, 1e-12);
+  EXPECT_EQ(judge_arrival(t, 0.14, 0.1).verdict, "not_aligned");  // 15 cm off
+  t.arrival_heading_rad = -0.2;
+  EXPECT_EQ(judge_arrival(t, 0.16, 0.1).verdict, "not_aligned");  // turned too far
+  t.arrival_source = core::navigator::Telemetry::ArrivalSource::kOdometry;
+  t.arrival_heading_rad = 0.0;
+  EXPECT_EQ(judge_arrival(t, 0.16, 0.1).source, "odometry");
+  t.arrival_along_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(judge_arrival(t, 0.16, 0.1).verdict, "unknown");
 }
 
 }  // namespace

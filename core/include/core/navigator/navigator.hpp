@@ -244,6 +244,8 @@ class Navigator {
   std::optional<double> control(features::FrameMatcher& fm, Telemetry& tel);
   /// Carries out a row of the transition table; the command for this frame.
   Command take(const Transition& t, int64_t t_ns, std::optional<double> demand, Telemetry& tel);
+  /// Fills the arrival fields of the telemetry (tour complete).
+  void report_arrival(int64_t t_ns, Telemetry& tel) const;
   /// True when the current segment has lasted longer than segment_overdue_* allow at t_ns.
   bool segment_overdue(int64_t t_ns) const;
   /// blind_switch_min_driven_fraction: whether a switch without a scale ratio is allowed now.
@@ -343,6 +345,9 @@ class Navigator {
   /// Vision took over after dead reckoning and no VNHV fix has measured the drift yet.
   bool drift_report_pending_ = false;
   std::optional<std::pair<double, double>> fix_correction_;
+  // The last VNHV fix on the final segment: the robot's pose in the final key image's taught
+  // frame (m, rad) and its frame time (arrival telemetry).
+  std::optional<std::pair<OdometryPose, int64_t>> final_fix_;
 };
 
 }  // namespace pepper::core::navigator

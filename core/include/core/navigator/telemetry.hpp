@@ -34,6 +34,9 @@ enum class StopReason {
 const char* to_string(NavState s);
 const char* to_string(StopReason r);
 
+/// A VNHV fix older than this (frame time) no longer says where the robot arrived.
+inline constexpr int64_t kArrivalFixMaxAgeNs = 1'000'000'000;
+
 struct Command {
   double v_m_s = 0.0;        ///< forward speed, base x
   double omega_rad_s = 0.0;  ///< yaw rate, > 0 turns left
@@ -94,6 +97,13 @@ struct Telemetry {
   /// On the first frame after a blind stretch with a VNHV fix: how far that fix moved the
   /// odometry estimate, the drift corrected at re-acquisition, m and rad (else NaN).
   double drift_corrected_m = kNaN, drift_corrected_rad = kNaN;
+  // Arrival (on tour-complete frames): where the robot stands in the final key image's taught
+  // frame (x forward: > 0 past it; y left; yaw: robot heading - taught heading), from a VNHV
+  // fix on the final segment at most kArrivalFixMaxAgeNs old (source kVision) or else from the
+  // odometry carried along the taught path (kOdometry); NaN and kNone when neither exists.
+  enum class ArrivalSource { kNone, kVision, kOdometry };
+  double arrival_along_m = kNaN, arrival_lateral_m = kNaN, arrival_heading_rad = kNaN;
+  ArrivalSource arrival_source = ArrivalSource::kNone;
   // Localisation.
   bool localization_ran = false;
   int localization_best = -1, localization_best_count = 0, localization_verified = 0;
