@@ -8,10 +8,11 @@
 //   planar/factor        the planar 2-point model with only the linear refinement
 //                        (general_refit false), camera pitch 0.18 rad (this data's, see
 //                        bench_navigator_real.cpp), planar_threshold_factor = factor;
-//   planar_general/...   the default: planar candidates at factor x the threshold, camera pitch
+//   planar_general/...   planar candidates at factor x the threshold, camera pitch
 //                        pitch_crad / 100 rad, then the five-point refit with at most refit_cap
 //                        samples (general_refit_max_iterations).
-// The KLT options are the defaults of the build (window_px 9 since issue 22).
+//   fast                 the app's `fast` preset: planar_general/5/0/25 with a 9 px KLT window.
+// The KLT options are the defaults (window_px 15) except in `fast`.
 // One iteration matches all pairs once. Counters: verified points and lines summed over the
 // neighbour pairs (points_gap1, lines_gap1), the pairs two apart (points_gap2, lines_gap2) and
 // the clutter pairs (points_clutter, e_found_clutter: pairs with an essential matrix), and
@@ -139,9 +140,10 @@ void BM_Planar(benchmark::State& state) {
 }
 BENCHMARK(BM_Planar)->ArgName("factor")->Arg(1)->Arg(3)->Arg(5)->Unit(benchmark::kMillisecond)->Iterations(1);
 
-// The default: planar candidates, general five-point refit (essential_ransac.hpp).
+// Planar candidates, general five-point refit (essential_ransac.hpp; the `fast` preset's model).
 void BM_PlanarGeneral(benchmark::State& state) {
   core::features::MatcherOptions mo;
+  mo.essential.planar = true;  // general_refit is on by default
   mo.essential.planar_threshold_factor = static_cast<double>(state.range(0));
   mo.essential.camera_pitch_rad = static_cast<double>(state.range(1)) / 100.0;
   mo.essential.general_refit_max_iterations = static_cast<int>(state.range(2));
@@ -156,6 +158,17 @@ BENCHMARK(BM_PlanarGeneral)
     ->Args({5, 0, 100})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
+
+// The app's `fast` preset: planar + refit and a 9 px KLT window (the features were
+// extracted with the default options: KLT pyramids are built on the fly for other windows).
+void BM_Fast(benchmark::State& state) {
+  core::features::MatcherOptions mo;
+  mo.essential.planar = true;
+  mo.klt.window_px = 9;
+  mo.klt.prior_window_px = 9;
+  run(state, mo);
+}
+BENCHMARK(BM_Fast)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 
