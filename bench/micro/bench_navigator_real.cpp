@@ -43,7 +43,9 @@
 // median over the steps that ended navigating (cpu_nav_p50_ms), over the Edge_01 frames
 // (cpu_route_p50_ms) and over the Edge_10 clutter frames (cpu_clutter_p50_ms); the mean
 // wall-clock split from the telemetry (StageTimings: extract_ms, match_ms, localize_ms,
-// control_ms, total_ms; wall time, inflated when the core is shared); the fraction of steps by
+// control_ms, total_ms, and within match_ms and localize_ms the current frame's matching split
+// lines_ms, klt_ms, essential_ms, three_view_ms, wide_ms (ORB matching); wall time, inflated
+// when the core is shared); the fraction of steps by
 // the state the step ended in: nav_frac (navigating), hold_frac (holding the last command),
 // lost_frac (lost, relocalising), unloc_frac (not localised yet), end_frac (tour complete or
 // overdue); loc_frac: steps that ran (re)localisation; nav_route_frac / nav_clutter_frac:
@@ -210,6 +212,11 @@ void step_sequence(benchmark::State& state, const Sequence& seq,
     sum.localize_ms += tm.localize_ms;
     sum.control_ms += tm.control_ms;
     sum.total_ms += tm.total_ms;
+    sum.lines_ms += tm.lines_ms;
+    sum.klt_ms += tm.klt_ms;
+    sum.essential_ms += tm.essential_ms;
+    sum.three_view_ms += tm.three_view_ms;
+    sum.wide_baseline_ms += tm.wide_baseline_ms;
     ++n;
     n_loc += r.telemetry.localization_ran;
     n_switched += r.telemetry.switched;
@@ -246,6 +253,11 @@ void step_sequence(benchmark::State& state, const Sequence& seq,
   state.counters["localize_ms"] = sum.localize_ms / d;
   state.counters["control_ms"] = sum.control_ms / d;
   state.counters["total_ms"] = sum.total_ms / d;
+  state.counters["lines_ms"] = sum.lines_ms / d;
+  state.counters["klt_ms"] = sum.klt_ms / d;
+  state.counters["essential_ms"] = sum.essential_ms / d;
+  state.counters["three_view_ms"] = sum.three_view_ms / d;
+  state.counters["wide_ms"] = sum.wide_baseline_ms / d;
   state.counters["nav_frac"] = n_nav / d;
   state.counters["hold_frac"] = n_hold / d;
   state.counters["lost_frac"] = n_lost / d;
