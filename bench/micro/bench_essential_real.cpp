@@ -2,10 +2,17 @@
 // of routes Edge_01, Edge_12 and Edge_45 of shared/data/pepper_qut_tmap (QVGA, default
 // FeatureExtractor), 1 and 2 key images apart, and Edge_01 image i against the opposite route's
 // Edge_10 image 12 - (12 * i) / 21 (the clutter frames of bench_navigator_real), with
-//   five_point/cap       the default five-point model with features.matcher.essential
-//                        .max_iterations = cap (1000: the cap OpenCV 4.6 used whatever was asked);
-//   planar/factor        the planar 2-point model, camera pitch 0.18 rad (this data's, see
-//                        bench_navigator_real.cpp), planar_threshold_factor = factor.
+//   five_point/cap       the five-point model alone (features.matcher.essential.planar false,
+//                        the default before issue 22) with max_iterations = cap (1000: the cap
+//                        OpenCV 4.6 used whatever was asked);
+//   planar/factor        the planar 2-point model with only the linear refinement
+//                        (general_refit false), camera pitch 0.18 rad (this data's, see
+//                        bench_navigator_real.cpp), planar_threshold_factor = factor;
+//   planar_general/...   planar candidates at factor x the threshold, camera pitch
+//                        pitch_crad / 100 rad, then the five-point refit with at most refit_cap
+//                        samples (general_refit_max_iterations).
+//   fast                 the app's `fast` preset: planar_general/5/0/25 with a 9 px KLT window.
+// The KLT options are the defaults (window_px 15) except in `fast`.
 // One iteration matches all pairs once. Counters: verified points and lines summed over the
 // neighbour pairs (points_gap1, lines_gap1), the pairs two apart (points_gap2, lines_gap2) and
 // the clutter pairs (points_clutter, e_found_clutter: pairs with an essential matrix), and
@@ -117,6 +124,7 @@ void run(benchmark::State& state, const core::features::MatcherOptions& mo) {
 
 void BM_FivePoint(benchmark::State& state) {
   core::features::MatcherOptions mo;
+  mo.essential.planar = false;
   mo.essential.max_iterations = static_cast<int>(state.range(0));
   run(state, mo);
 }
@@ -125,11 +133,42 @@ BENCHMARK(BM_FivePoint)->ArgName("cap")->Arg(1000)->Arg(300)->Unit(benchmark::kM
 void BM_Planar(benchmark::State& state) {
   core::features::MatcherOptions mo;
   mo.essential.planar = true;
+  mo.essential.general_refit = false;
   mo.essential.camera_pitch_rad = 0.18;
   mo.essential.planar_threshold_factor = static_cast<double>(state.range(0));
   run(state, mo);
 }
 BENCHMARK(BM_Planar)->ArgName("factor")->Arg(1)->Arg(3)->Arg(5)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// Planar candidates, general five-point refit (essential_ransac.hpp; the `fast` preset's model).
+void BM_PlanarGeneral(benchmark::State& state) {
+  core::features::MatcherOptions mo;
+  mo.essential.planar = true;  // general_refit is on by default
+  mo.essential.planar_threshold_factor = static_cast<double>(state.range(0));
+  mo.essential.camera_pitch_rad = static_cast<double>(state.range(1)) / 100.0;
+  mo.essential.general_refit_max_iterations = static_cast<int>(state.range(2));
+  run(state, mo);
+}
+BENCHMARK(BM_PlanarGeneral)
+    ->ArgNames({"factor", "pitch_crad", "refit_cap"})
+    ->Args({5, 0, 25})
+    ->Args({5, 18, 25})
+    ->Args({8, 0, 25})
+    ->Args({5, 0, 10})
+    ->Args({5, 0, 100})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+
+// The app's `fast` preset: planar + refit and a 9 px KLT window (the features were
+// extracted with the default options: KLT pyramids are built on the fly for other windows).
+void BM_Fast(benchmark::State& state) {
+  core::features::MatcherOptions mo;
+  mo.essential.planar = true;
+  mo.klt.window_px = 9;
+  mo.klt.prior_window_px = 9;
+  run(state, mo);
+}
+BENCHMARK(BM_Fast)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 

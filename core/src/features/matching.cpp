@@ -2,6 +2,7 @@
 #include "core/features/matching.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -19,6 +20,27 @@
 
 namespace pepper::core::features {
 namespace {
+
+// Adds the wall-clock time of its scope to *ms (telemetry; nothing when ms is null).
+class ScopedMs {
+ public:
+  explicit ScopedMs(double* ms) : ms_(ms), t0_(std::chrono::steady_clock::now()) {}
+  ~ScopedMs() {
+    if (ms_ != nullptr)
+      *ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_)
+                  .count();
+  }
+  ScopedMs(const ScopedMs&) = delete;
+  ScopedMs& operator=(const ScopedMs&) = delete;
+
+ private:
+  double* ms_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+double* field(MatchTimings* t, double MatchTimings::*member) {
+  return t != nullptr ? &(t->*member) : nullptr;
+}
 
 std::string join(const std::vector<std::string>& errors) {
   std::string s;
@@ -430,8 +452,12 @@ namespace {
 // KLT of a's corners into b (klt_track) and essential RANSAC, into r.
 void track_and_verify_points(const ImageFeatures& a, const ImageFeatures& b,
                              const MatcherOptions& options, const cv::Point2f& shift_px,
-                             std::span<const PointMatch> prior, TwoViewMatches& r) {
-  const Tracks t = klt_track(a, b, options.klt, shift_px, prior);
+                             std::span<const PointMatch> prior, TwoViewMatches& r,
+                             MatchTimings* timings) {
+  const Tracks t = [&] {
+    const ScopedMs ms(field(timings, &MatchTimings::klt_ms));
+    return klt_track(a, b, options.klt, shift_px, prior);
+  }();
   std::vector<PointMatch> cands;
   std::vector<float> cost;  // KLT patch error
   cands.reserve(t.ok.size());
@@ -447,20 +473,25 @@ void track_and_verify_points(const ImageFeatures& a, const ImageFeatures& b,
     cands.push_back(m);
     cost.push_back(t.error[i]);
   }
+  const ScopedMs ms(field(timings, &MatchTimings::essential_ms));
   verify_points(b, std::move(cands), cost, options, r);
 }
 
 }  // namespace
 
 TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
-                              const MatcherOptions& options, std::span<const PointMatch> prior) {
+                              const MatcherOptions& options, std::span<const PointMatch> prior,
+                              MatchTimings* timings) {
   const auto errors = options.validate();
   if (!errors.empty()) throw std::invalid_argument("match_two_view: " + join(errors));
   check_image(a, "match_two_view (a)");
   check_image(b, "match_two_view (b)");
   TwoViewMatches r;
-  const std::vector<LineMatch> line_cands =
-      options.match_lines ? line_candidates(a, b, options, r) : std::vector<LineMatch>{};
+  std::vector<LineMatch> line_cands;
+  if (options.match_lines) {
+    const ScopedMs ms(field(timings, &MatchTimings::lines_ms));
+    line_cands = line_candidates(a, b, options, r);
+  }
   if (options.match_points && !a.corners_px.empty()) {
     // KLT starts at the lines' common shift when the image moved further than a KLT window
     // (turns); measured in closed loop on the mock robot against starting from rest, and
@@ -469,14 +500,15 @@ TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
     const cv::Point2f shift = options.klt_shift_from_lines
                                   ? shift_from_lines(a, b, line_cands, options.klt)
                                   : cv::Point2f(0.0f, 0.0f);
-    track_and_verify_points(a, b, options, shift, prior, r);
+    track_and_verify_points(a, b, options, shift, prior, r, timings);
   }
+  const ScopedMs ms(field(timings, &MatchTimings::lines_ms));
   verify_lines(a, b, options, line_cands, r);
   return r;
 }
 
 TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& b,
-                                   const MatcherOptions& options) {
+                                   const MatcherOptions& options, MatchTimings* timings) {
   const auto errors = options.validate();
   if (!errors.empty()) throw std::invalid_argument("match_wide_baseline: " + join(errors));
   TwoViewMatches r;
@@ -484,6 +516,7 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
   std::vector<float> cost;  // Hamming distance of the match
   if (options.match_points && !a.keypoint_descriptors.empty() &&
       !b.keypoint_descriptors.empty()) {
+    const ScopedMs ms(field(timings, &MatchTimings::wide_baseline_ms));
     const cv::Mat& da = a.keypoint_descriptors;
     const cv::Mat& db = b.keypoint_descriptors;
     const int na = da.rows, nb = db.rows;
@@ -532,7 +565,11 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
       cost.push_back(static_cast<float>(d1));
     }
   }
-  verify_points(b, std::move(cands), cost, options, r);
+  {
+    const ScopedMs ms(field(timings, &MatchTimings::essential_ms));
+    verify_points(b, std::move(cands), cost, options, r);
+  }
+  const ScopedMs ms(field(timings, &MatchTimings::lines_ms));
   if (options.match_lines) verify_lines(a, b, options, r);
   return r;
 }
@@ -632,7 +669,8 @@ const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
-  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p)).first->second;
+  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p, &timings_))
+      .first->second;
 }
 
 const TwoViewMatches& FrameMatcher::two_view_for_control(int64_t key_id, const ImageFeatures& key) {
@@ -667,13 +705,19 @@ const ThreeViewMatches& FrameMatcher::three_view(int64_t x_id, const ImageFeatur
   if (it != three_view_.end()) return it->second;
   const TwoViewMatches& xm = two_view(x_id, x);
   const TwoViewMatches& ym = two_view(y_id, y);
-  return three_view_.emplace(key, verify_three_view(x, xm, current_, y, ym, options_)).first->second;
+  ThreeViewMatches r;
+  {
+    const ScopedMs ms(&timings_.three_view_ms);
+    r = verify_three_view(x, xm, current_, y, ym, options_);
+  }
+  return three_view_.emplace(key, std::move(r)).first->second;
 }
 
 const TwoViewMatches& FrameMatcher::wide_baseline(int64_t key_id, const ImageFeatures& key) {
   auto it = wide_.find(key_id);
   if (it != wide_.end()) return it->second;
-  return wide_.emplace(key_id, match_wide_baseline(key, current_, options_)).first->second;
+  return wide_.emplace(key_id, match_wide_baseline(key, current_, options_, &timings_))
+      .first->second;
 }
 
 }  // namespace pepper::core::features

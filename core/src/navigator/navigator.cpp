@@ -943,11 +943,23 @@ StepResult Navigator::step(const Frame& frame) {
   // 1. Perceive (2. and localise when there is no segment).
   const bool localising = decide(Phase::kLocalise, state_, facts) != nullptr;
   features::FrameMatcher fm = perceive(frame, localising, tel);
+  // The matching split in the telemetry: whatever the FrameMatcher did by then.
+  const auto split = [&] {
+    const features::MatchTimings& m = fm.timings();
+    tel.timings.lines_ms = m.lines_ms;
+    tel.timings.klt_ms = m.klt_ms;
+    tel.timings.essential_ms = m.essential_ms;
+    tel.timings.three_view_ms = m.three_view_ms;
+    tel.timings.wide_baseline_ms = m.wide_baseline_ms;
+  };
   if (localising) {
     facts.localised = localize(fm, tel);
     const Transition& t = *decide(Phase::kLocalise, state_, facts);
     const Command c = take(t, frame.t_ns, std::nullopt, tel);
-    if (t.action != Action::kBeginSegment) return finish(c);
+    if (t.action != Action::kBeginSegment) {
+      split();
+      return finish(c);
+    }
   }
   // 3. Associate with the segment's key images; 4. switch key images.
   auto t0 = Clock::now();
@@ -957,6 +969,7 @@ StepResult Navigator::step(const Frame& frame) {
     const Command c = take(t, frame.t_ns, std::nullopt, tel);
     if (t.action != Action::kBeginSegment) {
       tel.timings.match_ms = ms_since(t0);
+      split();
       return finish(c);
     }
   }
@@ -971,6 +984,7 @@ StepResult Navigator::step(const Frame& frame) {
   const Command cmd = take(*decide(Phase::kControl, state_, facts), frame.t_ns, demand, tel);
   tel.timings.control_ms = ms_since(t0);
   remember_tracks(fm);
+  split();
   finish(cmd);
   if (state_ == NavState::kLost) {
     // Keep the last segment in telemetry for this frame, then forget it (relocalise next).

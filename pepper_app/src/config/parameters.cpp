@@ -359,14 +359,21 @@ std::vector<Parameter> build_table() {
         "fewer inliers: no essential matrix"),
     row("features.matcher.essential.planar",
         essential, &Essential::planar, "", "",
-        "planar-motion 2-point model instead of five-point (off: real Pepper key images also "
-        "pitch and roll by up to a few degrees; docs/perception.md)"),
+        "planar-motion 2-point RANSAC gathers the candidates first (then general_refit); off: "
+        "five-point RANSAC on all matches (docs/perception.md \"Two-view verification\")"),
     row("features.matcher.essential.camera_pitch_rad",
         essential, &Essential::camera_pitch_rad, "rad", "(-1, 1)",
         "planar model: the camera's pitch to the floor (> 0 looks down)"),
     row("features.matcher.essential.planar_threshold_factor",
         essential, &Essential::planar_threshold_factor, "", "[1, 10]",
         "planar model: its RANSAC threshold in multiples of threshold_px"),
+    row("features.matcher.essential.general_refit",
+        essential, &Essential::general_refit, "", "",
+        "planar model: five-point RANSAC on its candidates decides (off: a linear refinement "
+        "of the planar model only)"),
+    row("features.matcher.essential.general_refit_max_iterations",
+        essential, &Essential::general_refit_max_iterations, "", "[1, 100000]",
+        "planar model: five-point samples on its candidates at most"),
     row("features.matcher.essential.five_point_fallback",
         essential, &Essential::five_point_fallback, "", "",
         "planar model: run five-point when it finds no model"),
@@ -1015,6 +1022,12 @@ const std::vector<Preset>& presets() {
        "The paper's settings: its IBVS law alone (g1 0.7, g2 0.3, lambda 1, 0.15 / 0.08 m/s; "
        "those are the defaults) instead of VNHV.",
        {"navigator.controller=ibvs"}},
+      {"fast",
+       "Issue 22's cheaper perception: the planar 2-point essential RANSAC with the general "
+       "refit, and a 9 px KLT window (docs/method/navigator.md \"Speed\"; not the default "
+       "yet: see there).",
+       {"features.matcher.essential.planar=true", "features.klt.window_px=9",
+        "features.klt.prior_window_px=9"}},
   };
   return list;
 }

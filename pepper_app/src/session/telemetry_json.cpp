@@ -81,7 +81,12 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
         {"localize", t.timings.localize_ms},
         {"match", t.timings.match_ms},
         {"control", t.timings.control_ms},
-        {"total", t.timings.total_ms}}},
+        {"total", t.timings.total_ms},
+        {"lines", t.timings.lines_ms},
+        {"klt", t.timings.klt_ms},
+        {"essential", t.timings.essential_ms},
+        {"three_view", t.timings.three_view_ms},
+        {"wide_baseline", t.timings.wide_baseline_ms}}},
   };
 }
 

@@ -242,9 +242,16 @@ TEST(ConfigParameters, PresetsApply) {
   EXPECT_EQ(load_app_config(ConfigSources{file.string(), "default", {}}).navigator.controller,
             ControllerKind::kVnhv);
 
-  EXPECT_NE(
-      config_error({"", "fast", {}}).find("--preset fast: unknown preset (known: default, paper)"),
-      std::string::npos);
+  EXPECT_NE(config_error({"", "turbo", {}})
+                .find("--preset turbo: unknown preset (known: default, paper, fast)"),
+            std::string::npos);
+  // fast (issue 22): the planar essential model and a 9 px KLT window, for extraction and
+  // tracking alike.
+  const auto fast = load_app_config(ConfigSources{"", "fast", {}}).navigator_options();
+  EXPECT_TRUE(fast.matcher.essential.planar);
+  EXPECT_EQ(fast.extractor.klt.window_px, 9);
+  EXPECT_EQ(fast.matcher.klt.window_px, 9);
+  EXPECT_FALSE(AppConfig{}.navigator_options().matcher.essential.planar);
   for (const Preset& p : presets()) {
     EXPECT_NO_THROW(load_app_config(ConfigSources{"", p.name, {}})) << p.name;
   }

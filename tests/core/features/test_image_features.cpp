@@ -140,5 +140,28 @@ TEST(Matching, ShiftedImageMatchesLinesAndPoints) {
   EXPECT_EQ(first.total(), m.total());
 }
 
+// The per-stage timings (issue 22's telemetry split) grow with the work each stage did, and a
+// cached result adds nothing.
+TEST(Matching, FrameMatcherTimesEachStage) {
+  const FeatureExtractor ex;
+  ImageFeatures a = ex.extract(drawn_scene(640, 480));
+  const ImageFeatures c = ex.extract(drawn_scene(640, 480, 3));
+  const ImageFeatures b = ex.extract(drawn_scene(640, 480, 6));
+  FrameMatcher fm(c);
+  EXPECT_EQ(fm.timings().klt_ms, 0.0);
+  fm.two_view(1, a);
+  const MatchTimings after_one = fm.timings();
+  EXPECT_GT(after_one.lines_ms, 0.0);
+  EXPECT_GT(after_one.klt_ms, 0.0);
+  EXPECT_GT(after_one.essential_ms, 0.0);
+  EXPECT_EQ(after_one.three_view_ms, 0.0);
+  fm.two_view(1, a);  // cached
+  EXPECT_EQ(fm.timings().klt_ms, after_one.klt_ms);
+  fm.three_view(1, a, 2, b);  // computes two_view(2, b), then the three views
+  EXPECT_GT(fm.timings().klt_ms, after_one.klt_ms);
+  EXPECT_GT(fm.timings().three_view_ms, 0.0);
+  EXPECT_EQ(fm.timings().wide_baseline_ms, 0.0);
+}
+
 }  // namespace
 }  // namespace pepper::core::features

@@ -76,6 +76,37 @@ TEST_P(EssentialSynthetic, RankedInputMeetsTheSameTargets) {
   }
 }
 
+// The planar model with the general refit (features.matcher.essential.planar, issue 22) meets
+// the five-point model's targets on the same scenes, ranked and not.
+TEST_P(EssentialSynthetic, PlanarWithGeneralRefitMeetsTheSameTargets) {
+  const double outliers = GetParam();
+  const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
+  EssentialRansacOptions o;
+  o.planar = true;
+  ASSERT_TRUE(o.general_refit);
+  for (const bool ranked : {false, true}) {
+    for (uint64_t seed = 1; seed <= 8; ++seed) {
+      const auto d = noisy_scene_points(k, outliers, seed);
+      const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px, o, ranked);
+      ASSERT_TRUE(r.found) << "seed " << seed;
+      const auto s = test::score(r.inliers, d.is_inlier);
+      EXPECT_GE(s.recall, 0.95) << "seed " << seed << " ranked " << ranked;
+      EXPECT_LE(s.contamination, 0.02) << "seed " << seed << " ranked " << ranked;
+    }
+  }
+}
+
+// Degenerate inputs give "not found" on the planar path too, never a crash.
+TEST(Essential, PlanarDegenerateInputsAreNotFound) {
+  EssentialRansacOptions o;
+  o.planar = true;
+  const std::vector<cv::Point2d> same(20, {0.1, 0.2});
+  EXPECT_FALSE(verify_essential(same, same, 500.0, o).found);
+  const std::vector<cv::Point2d> few(4, {0.1, 0.2});
+  EXPECT_FALSE(verify_essential(few, few, 500.0, o).found);
+  EXPECT_FALSE(verify_essential({}, {}, 500.0, o).found);
+}
+
 TEST(Essential, RankedWithoutBaselineFallsBackToRansac) {
   // Zero baseline (the same points in both views): PROSAC's cheirality check rejects every
   // sample; the result is plain RANSAC's.

@@ -12,7 +12,8 @@
 // (cv::remap interpolates at 1/32-pixel fixed point, the renderer in float). That moves the tour's
 // fifth key image from frame 78 to 76 and lets VNHV keep its estimate for 5 blank frames
 // instead of 2, stopping at +2.2 s where Navigator.VanishingFeaturesHoldThenStopWithReason
-// asserts +1.6 s. The navigator tests' measured bounds belong to this renderer.
+// asserted +1.6 s (it now asserts the design bound, +2.2 s). The navigator tests' measured
+// bounds belong to this renderer.
 
 #include <cmath>
 #include <cstdint>

@@ -142,6 +142,16 @@ struct ThreeViewMatches {
   int total() const { return n_lines() + n_points(); }
 };
 
+/// Wall-clock time of each matching stage, summed over the calls that fill it (telemetry only,
+/// never used by a decision; issue 22's split of the step). Thread-compatible plain data.
+struct MatchTimings {
+  double lines_ms = 0.0;          ///< line descriptor matching, orientation and epipolar checks
+  double klt_ms = 0.0;            ///< KLT tracking of the key image's corners
+  double essential_ms = 0.0;      ///< essential RANSAC (KLT tracks and ORB matches)
+  double three_view_ms = 0.0;     ///< three-view verification (trifocal RANSAC, point chaining)
+  double wide_baseline_ms = 0.0;  ///< ORB descriptor matching (its RANSAC: essential_ms)
+};
+
 /// Descriptor matching (mutual + ratio) followed by the orientation checks; no epipolar check.
 std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& b,
                                    const LineMatchOptions& options = {});
@@ -152,13 +162,16 @@ std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& 
 /// one; idx_a and b_px are used): those corners start from b_px with klt.prior_max_level levels
 /// instead of from their position in a with klt.max_level (faster), and fall back to the latter
 /// when that track fails. The result is a function of (a, b, options, prior).
+/// `timings`, when given, gets the stages' wall-clock time added.
 TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
                               const MatcherOptions& options = {},
-                              std::span<const PointMatch> prior = {});
+                              std::span<const PointMatch> prior = {},
+                              MatchTimings* timings = nullptr);
 
 /// Wide-baseline verified lines and points (ORB keypoints of both views).
 TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& b,
-                                   const MatcherOptions& options = {});
+                                   const MatcherOptions& options = {},
+                                   MatchTimings* timings = nullptr);
 
 /// Three-view verification from two two-view results sharing the hub as their view b.
 ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches& x_to_hub,
@@ -180,6 +193,8 @@ class FrameMatcher {
 
   const ImageFeatures& current() const { return current_; }
   const MatcherOptions& options() const { return options_; }
+  /// Wall-clock time of the work done so far for this frame, per stage (telemetry).
+  const MatchTimings& timings() const { return timings_; }
 
   /// KLT priors for a key image (see match_two_view): set before the first two_view() of that
   /// key id (later calls have no effect on an already computed result).
@@ -213,6 +228,7 @@ class FrameMatcher {
   };
   ImageFeatures current_;
   MatcherOptions options_;
+  MatchTimings timings_;
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;

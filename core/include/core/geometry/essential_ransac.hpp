@@ -1,15 +1,25 @@
 #pragma once
 // Two-view point verification: essential-matrix RANSAC on normalised image coordinates
 // (METHOD.md "Features and verification": a point match counts only if it passes essential
-// RANSAC). Two models:
-//  - five-point (default): the general 5-DOF model (cv::findEssentialMat, Nister's solver).
-//  - planar (`planar = true`): the camera moves on the floor with a known pitch, 2 DOF; 2-point
-//    RANSAC of planar_essential.hpp at `planar_threshold_factor` x the threshold, then a general
-//    (8-point linear) refinement at the threshold. Not the default: between real Pepper key
-//    images (shared/data pepper_qut_tmap) the camera also pitches and rolls by 0.2-6 deg (the
-//    base sways), and the planar path (pitch 0.18 rad) verified 95 % of the five-point path's
-//    points between neighbouring key images and 83 % two apart (docs/perception.md). With
-//    `five_point_fallback` the five-point model runs when the planar one finds no support.
+// RANSAC). Models:
+//  - five-point (default, `planar = false`): the general 5-DOF model (cv::findEssentialMat,
+//    Nister's solver) on all matches.
+//  - planar then general (`planar = true`, issue 22): the camera moves on the floor with a
+//    known pitch (2 DOF), so 2-point RANSAC (planar_essential.hpp) at `planar_threshold_factor`
+//    x the threshold finds the candidates cheaply (~20 samples at 50 % outliers instead of ~150
+//    five-point ones, and it gives up after its adaptive count on views that share no scene);
+//    with `general_refit` the general five-point model is then fitted by RANSAC on those
+//    candidates only (nearly all inliers: at most `general_refit_max_iterations` samples) and
+//    classifies every match at the threshold, with the linear local optimisation. Why the
+//    general model at the end: between real Pepper key images the camera also pitches and
+//    rolls by 0.2-6 deg (the base sways); the planar model with only a linear refinement
+//    (`general_refit = false`) verified 95 % of the five-point model's points between
+//    neighbouring key images and 83 % two apart, with the refit 98-100 % and 97 %
+//    (bench_essential_real, docs/perception.md "Two-view verification"). Not the default yet:
+//    three core tests change (docs/method/navigator.md "Speed", issue 22). With
+//    `five_point_fallback` the five-point model also runs where the planar model finds no
+//    support (off: on views that share no scene it only adds time and the 5-DOF model's chance
+//    fits).
 //
 // Inputs: matched points in normalised coordinates of view a and view b (same length); the
 // threshold is given in pixels and converted with `focal_px` (threshold_norm = threshold_px /
@@ -33,10 +43,14 @@ struct EssentialRansacOptions {
   double confidence = 0.999;   ///< RANSAC confidence, (0, 1)
   int max_iterations = 1000;   ///< RANSAC cap (five-point samples; planar: 2-point samples)
   int min_inliers = 8;         ///< below this, the result is "not found" (5..)
-  bool planar = false;         ///< planar-motion 2-point model; false: general five-point
+  bool planar = false;         ///< planar 2-point candidates first (then general); false: five-point only
   double camera_pitch_rad = 0.0;  ///< planar model: camera pitch (> 0 looks down)
   double planar_threshold_factor = 5.0;  ///< planar model's threshold: this x threshold_px (the
                                          ///< base sways; a general refinement follows)
+  /// planar model: the general five-point model refitted on its candidates (false: a linear
+  /// refinement only; header comment)
+  bool general_refit = true;
+  int general_refit_max_iterations = 25;  ///< five-point samples on the planar candidates
   bool five_point_fallback = false;  ///< planar model found nothing: try the five-point model
                                      ///< (off: on views that share no scene it only adds time
                                      ///< and the 5-DOF model's chance fits)

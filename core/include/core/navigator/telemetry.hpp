@@ -50,6 +50,13 @@ struct StageTimings {
   double match_ms = 0.0;     ///< two- and three-view matching for switching and control
   double control_ms = 0.0;   ///< control law + schedule
   double total_ms = 0.0;
+  /// The current frame's matching work (features::MatchTimings of its FrameMatcher, within
+  /// match_ms and localize_ms; VNHV's key-to-key segment match once per segment is not in it).
+  double lines_ms = 0.0;
+  double klt_ms = 0.0;
+  double essential_ms = 0.0;
+  double three_view_ms = 0.0;
+  double wide_baseline_ms = 0.0;
 };
 
 struct Telemetry {
