@@ -52,14 +52,14 @@ std::string strip_code(std::string s) {
   return s;
 }
 
-struct Run {
+struct AppRun {
   int exit_code = -1;
   std::string out, err;
 };
 
 /// Runs pepper_app with `args` (stdin /dev/null, no password in the environment), at most
 /// `limit`; exit -1 when it had to be killed.
-Run run_app(std::vector<std::string> args, const fs::path& dir,
+AppRun run_app(std::vector<std::string> args, const fs::path& dir,
             std::chrono::seconds limit = std::chrono::seconds(120)) {
   args.insert(args.begin(), kBinary);
   std::vector<char*> argv;
@@ -82,7 +82,7 @@ Run run_app(std::vector<std::string> args, const fs::path& dir,
   pid_t pid = -1;
   const int rc = posix_spawn(&pid, kBinary.c_str(), &fa, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&fa);
-  Run r;
+  AppRun r;
   if (rc != 0) return r;
   const auto end = std::chrono::steady_clock::now() + limit;
   for (;;) {
@@ -155,9 +155,15 @@ std::regex pattern_regex(const std::string& pattern) {
         continue;
       }
     }
-    if (pattern.compare(i, 3, "...") == 0) {
+    if (pattern.compare(i, 3, "...") == 0) {  // any text, the spaces around it included
+      if (re.size() >= 3 && re.compare(re.size() - 3, 3, "\\s+") == 0) re.resize(re.size() - 3);
       re += "[\\s\\S]*?";
       i += 2;
+      while (i + 1 < pattern.size() && pattern[i + 1] == ' ') ++i;
+      continue;
+    }
+    if (c == ' ') {  // a space in the table stands for any white space (line breaks too)
+      if (re.size() < 3 || re.compare(re.size() - 3, 3, "\\s+") != 0) re += "\\s+";
       continue;
     }
     if (std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos) re += '\\';
@@ -241,7 +247,7 @@ TEST_F(ErrorsTable, EveryOfflineTriggerGivesTheTablesMessageAndExitCode) {
     }
     fs::remove_all(dir_ / "tmp");
     fs::create_directories(dir_ / "tmp");
-    const Run run = run_app(args, dir_);
+    const AppRun run = run_app(args, dir_);
     ++triggered;
     EXPECT_EQ(run.exit_code, want_exit) << "stderr:\n" << run.err;
     EXPECT_TRUE(std::regex_search(run.err, pattern_regex(r.message)))
