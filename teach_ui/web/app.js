@@ -76,6 +76,8 @@
     });
     for (const id of LIVE_IDS) $(id).classList.toggle('stale', !live);
     if (!live) {
+      pendingFrame = null;
+      frameTimes.length = 0;
       setPill('pill-robot', 'robot: unknown (app not connected)', 'bad');
       $('m-fps').textContent = '-- fps';
       $('m-latency').textContent = 'latency --';
@@ -189,6 +191,8 @@
     ui.framesDrawn += 1;
     ui.lastSeq = header.seq || 0;
     $('frame-counter').textContent = String(ui.framesDrawn);
+    // A frame decoded after the socket closed is the last image, not a live rate or latency.
+    if (!ui.live) return;
     const now = performance.now();
     frameTimes.push(now);
     while (frameTimes.length && now - frameTimes[0] > 2000) frameTimes.shift();
@@ -328,6 +332,9 @@
   }
 
   let activeTabChosenByUser = false;
+  const ROBOT_WARNING_SHOWN_MS = 10000;
+  let robotWarningTimer = null;
+  let lastRobotWarning = null;
 
   function renderState(patch) {
     const s = ui.state;
@@ -358,10 +365,18 @@
       b.classList.toggle('recording', !!s.recording);
     }
     if ('robot_warning' in patch) {
+      // The app reports a warning as long as it holds (checked every 0.5 s); one not renewed for
+      // ROBOT_WARNING_SHOWN_MS is over and must not stay on screen as if it were current.
       const el = $('banner-robot-warning');
+      clearTimeout(robotWarningTimer);
       el.hidden = !s.robot_warning;
-      el.textContent = s.robot_warning ? `Robot warning: ${s.robot_warning}` : '';
-      if (s.robot_warning) logLine(`robot warning: ${s.robot_warning}`);
+      el.textContent = s.robot_warning
+        ? `Robot warning (${new Date().toLocaleTimeString()}): ${s.robot_warning}` : '';
+      if (s.robot_warning) {
+        if (s.robot_warning !== lastRobotWarning) logLine(`robot warning: ${s.robot_warning}`);
+        robotWarningTimer = setTimeout(() => { el.hidden = true; }, ROBOT_WARNING_SHOWN_MS);
+      }
+      lastRobotWarning = s.robot_warning;
     }
     if ('teach' in patch || 'warnings' in patch || 'drive' in patch) renderTeach();
     if ('offline' in patch) drawTopView();

@@ -89,7 +89,7 @@ async function teachStep() {
       await expectConnected(page);
       await expectFramesAdvance(page, 3);
       const pill = await page.textContent('#pill-mode');
-      if (!pill.includes('teach')) throw new Error(`mode pill "${pill}"`);
+      if (!pill.includes('teach (simulated robot)')) throw new Error(`mode pill "${pill}"`);
       const robot = await page.textContent('#pill-robot');
       if (robot !== 'robot: connected') throw new Error(`robot pill "${robot}"`);
       return pill;

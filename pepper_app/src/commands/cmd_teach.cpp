@@ -1,5 +1,6 @@
 // `pepper_app teach --robot URL --map DIR`: teach a tour (record frames, pick key images online,
 // save the map). See pepper_app/src/session/teach_session.hpp and docs/user_guide.md.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -141,9 +142,13 @@ int run_teach(const TeachArgs& a) {
     std::cerr << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
               << o.recording_dir.string() << ", " << r.distance_m << " m";
     if (r.map_saved) {
-      std::cerr << "; map with " << r.key_images << " key images and " << std::fixed
-                << std::setprecision(2) << r.map_length_m << std::defaultfloat
-                << " m saved to " << a.map;
+      std::cerr << "; map with " << r.key_images << " key images";
+      // NaN: a map without distances (no odometry and no commanded speeds recorded).
+      if (std::isfinite(r.map_length_m)) {
+        std::cerr << " and " << std::fixed << std::setprecision(2) << r.map_length_m
+                  << std::defaultfloat << " m";
+      }
+      std::cerr << " saved to " << a.map;
     }
     std::cerr << "\n";
     if (!r.error.empty()) {

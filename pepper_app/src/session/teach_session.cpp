@@ -82,6 +82,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
 
   try {
     link.publish_state({{"mode", "teach"},
+                        {"robot_kind", robot.mock ? "mock" : "real"},
                         {"connection", {{"robot", "connecting"}, {"head_locked", false}}}});
     bridge.connect();
     const nb::HeadLockStatus head = bridge.lock_head(options.head);
@@ -374,13 +375,14 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
               : summary.key_images.back().travelled_m - summary.key_images.front().travelled_m;
       result.map_length_m = map_length_m;
       nlohmann::json saved_keys = nlohmann::json::array();
+      const double first_m = summary.key_images.empty() ? 0.0 : summary.key_images[0].travelled_m;
       for (std::size_t i = 0; i < summary.key_images.size(); ++i) {
         const auto& k = summary.key_images[i];
         const bool is_weak = k.lines + k.corners < options.min_key_features;
         nlohmann::json key = {{"index", i},
                               {"n_lines", k.lines},
                               {"n_points", k.corners},
-                              {"distance_m", k.travelled_m - summary.key_images.front().travelled_m},
+                              {"distance_m", k.travelled_m - first_m},
                               {"weak", is_weak}};
         if (i < key_list.size() && key_list[i].contains("rule")) key["rule"] = key_list[i]["rule"];
         saved_keys.push_back(std::move(key));

@@ -7,8 +7,8 @@
 //   - stderr contains the offending value (the bracketed part of the trigger).
 // So the table cannot drift from the code: a changed message, exit code or missing next step
 // fails here.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -60,7 +60,7 @@ struct AppRun {
 /// Runs pepper_app with `args` (stdin /dev/null, no password in the environment), at most
 /// `limit`; exit -1 when it had to be killed.
 AppRun run_app(std::vector<std::string> args, const fs::path& dir,
-            std::chrono::seconds limit = std::chrono::seconds(120)) {
+               std::chrono::seconds limit = std::chrono::seconds(120)) {
   args.insert(args.begin(), kBinary);
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
@@ -132,8 +132,8 @@ std::vector<Row> read_table() {
     Row r;
     r.line = n;
     r.command = cells[0];
-    r.message = cells[1].rfind("same as the row above", 0) == 0 ? previous_message
-                                                                 : strip_code(cells[1]);
+    r.message =
+        cells[1].rfind("same as the row above", 0) == 0 ? previous_message : strip_code(cells[1]);
     previous_message = r.message;
     r.exit_text = cells[4];
     r.trigger = strip_code(cells[5]);
@@ -189,11 +189,12 @@ class ErrorsTable : public ::testing::Test {
     fs::create_directories(dir_ / "junk_map");
     std::ofstream(dir_ / "junk_map" / "manifest.json") << "this is not JSON\n";
     // A short valid map at 320x240 (the rows that need one refuse something else about it).
-    map_ok_ = run_app({"teach", "--robot", "mock:" + (kSource / "worlds/robotics_room.yaml").string(),
-                       "--map", (dir_ / "map").string(), "--max-distance", "0.6", "--set",
-                       "robot.camera_width_px=320", "--set", "robot.camera_height_px=240"},
-                      dir_)
-                  .exit_code == 0;
+    map_ok_ =
+        run_app({"teach", "--robot", "mock:" + (kSource / "worlds/robotics_room.yaml").string(),
+                 "--map", (dir_ / "map").string(), "--max-distance", "0.6", "--set",
+                 "robot.camera_width_px=320", "--set", "robot.camera_height_px=240"},
+                dir_)
+            .exit_code == 0;
   }
   static std::string expand(const std::string& s) {
     std::string r = replace_all(s, "%TMP%", (dir_ / "tmp").string());
