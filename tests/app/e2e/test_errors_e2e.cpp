@@ -2,9 +2,9 @@
 // error says what to do"). The test reads the tables of that page, runs each row's offline
 // trigger with the built `pepper_app` binary and checks that
 //   - the exit code is the row's,
-//   - stderr matches the row's message pattern ({name} = a value, ... = any text), which for
-//     every row includes what to do next,
-//   - stderr contains the offending value (the bracketed part of the trigger).
+//   - stderr (or stdout, for doctor's report) matches the row's message pattern ({name} = a
+//     value, ... = any text), which for every row includes what to do next,
+//   - that output contains the offending value (the bracketed part of the trigger).
 // So the table cannot drift from the code: a changed message, exit code or missing next step
 // fails here.
 #include <fcntl.h>
@@ -251,13 +251,15 @@ TEST_F(ErrorsTable, EveryOfflineTriggerGivesTheTablesMessageAndExitCode) {
     const AppRun run = run_app(args, dir_);
     ++triggered;
     EXPECT_EQ(run.exit_code, want_exit) << "stderr:\n" << run.err;
-    EXPECT_TRUE(std::regex_search(run.err, pattern_regex(r.message)))
-        << "pattern: " << r.message << "\nstderr:\n"
-        << run.err;
+    // Errors go to stderr; doctor's report (with its FAIL lines) to stdout.
+    const std::string printed = run.err + "\n" + run.out;
+    EXPECT_TRUE(std::regex_search(printed, pattern_regex(r.message)))
+        << "pattern: " << r.message << "\noutput:\n"
+        << printed;
     if (!value.empty()) {
-      EXPECT_NE(run.err.find(value), std::string::npos)
+      EXPECT_NE(printed.find(value), std::string::npos)
           << "the message does not name '" << value << "':\n"
-          << run.err;
+          << printed;
     }
   }
   EXPECT_GE(triggered, 30) << "fewer offline triggers than the table had";
