@@ -17,6 +17,7 @@
 #include <condition_variable>
 #include <deque>
 #include <fstream>
+#include <future>
 #include <map>
 #include <mutex>
 #include <set>
@@ -43,6 +44,7 @@ constexpr std::uintmax_t kMaxServedFileBytes = 16u << 20;  // static assets are 
 constexpr auto kHttpTimeout = std::chrono::seconds(30);
 constexpr auto kWsHandshakeTimeout = std::chrono::seconds(10);
 constexpr std::size_t kMaxQueuedTextMessages = 64;         // hello + pongs waiting to be written
+constexpr auto kStopDrainTime = std::chrono::milliseconds(500);  // stop(): send what is queued
 constexpr auto kWsIdleTimeout = std::chrono::seconds(10);  // pings at half of it keep it alive
 
 }  // namespace
@@ -151,6 +153,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     if (pending_frame_) ++impl_.frames_dropped;
     pending_frame_ = std::move(m);
     maybe_write();
+  }
+
+  /// Nothing but a camera frame is waiting to be sent (frames may be dropped; state may not).
+  bool drained() const {
+    return gone_ || !accepted_ ||
+           (!writing_ && text_out_.empty() && pending_state_.empty() && pending_images_.empty() &&
+            pending_samples_.empty() && !samples_reset_);
   }
 
   /// Hard close (server stop): cancels every pending operation.
@@ -650,6 +659,20 @@ void UiServer::start() {
 void UiServer::stop() {
   Impl& impl = *impl_;
   if (!impl.running.exchange(false)) return;
+  // The last state an app publishes before stopping (the final figures, "disconnected") must
+  // reach the open pages: let the sessions send what is queued, for at most kStopDrainTime.
+  const auto drain_until = std::chrono::steady_clock::now() + kStopDrainTime;
+  while (impl.thread.joinable() && std::chrono::steady_clock::now() < drain_until) {
+    auto drained = std::make_shared<std::promise<bool>>();
+    auto answer = drained->get_future();
+    net::post(impl.ioc, [&impl, drained] {
+      bool all = true;
+      for (const auto& s : impl.sessions) all = all && s->drained();
+      drained->set_value(all);
+    });
+    if (answer.wait_until(drain_until) != std::future_status::ready || answer.get()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
   net::post(impl.ioc, [&impl] {
     beast::error_code ec;
     if (impl.acceptor) impl.acceptor->close(ec);

@@ -23,6 +23,7 @@
     overlayLinesDrawn: 0,
     overlayPointsDrawn: 0,
     framesWithOverlay: 0,
+    live: false,     // WebSocket to the app open
     lastSeq: 0,
     wsOpen: false,
     sent: [],        // last intents sent (type only), newest last
@@ -42,6 +43,7 @@
     ws.onopen = () => {
       ui.wsOpen = true;
       reconnectDelayMs = 500;
+      setLive(true);
       setPill('pill-ui', 'UI: connected', 'ok');
       logLine('connected to the app');
     };
@@ -50,6 +52,7 @@
       ui.wsOpen = false;
       setPill('pill-ui', 'UI: disconnected', 'bad');
       releaseAll('socket_closed', /*send=*/false);  // the server stops a driving client itself
+      setLive(false);
       if (was) logLine('connection to the app lost; retrying');
       setTimeout(connect, reconnectDelayMs);
       reconnectDelayMs = Math.min(5000, reconnectDelayMs * 2);
@@ -58,6 +61,29 @@
       if (typeof ev.data === 'string') onText(ev.data);
       else onBinary(ev.data);
     };
+  }
+
+  // Without the app nothing on the page is live: say so at once, disable the controls (except
+  // STOP, which does no harm) and mark the live readings stale instead of leaving the last ones
+  // looking current.
+  const LIVE_IDS = ['m-fps', 'm-latency', 'm-rtt', 'pill-head', 'teach-kv', 'drive-readout'];
+  function setLive(live) {
+    ui.live = live;
+    $('banner-offline').hidden = live;
+    document.body.classList.toggle('offline', !live);
+    document.querySelectorAll('.panel button, .pad-btn, #v-max, #w-max').forEach((b) => {
+      b.disabled = !live;
+    });
+    for (const id of LIVE_IDS) $(id).classList.toggle('stale', !live);
+    if (!live) {
+      pendingFrame = null;
+      frameTimes.length = 0;
+      setPill('pill-robot', 'robot: unknown (app not connected)', 'bad');
+      $('m-fps').textContent = '-- fps';
+      $('m-latency').textContent = 'latency --';
+      $('m-rtt').textContent = 'rtt --';
+      $('drive-readout').textContent = 'idle';
+    }
   }
 
   function send(obj) {
@@ -165,6 +191,8 @@
     ui.framesDrawn += 1;
     ui.lastSeq = header.seq || 0;
     $('frame-counter').textContent = String(ui.framesDrawn);
+    // A frame decoded after the socket closed is the last image, not a live rate or latency.
+    if (!ui.live) return;
     const now = performance.now();
     frameTimes.push(now);
     while (frameTimes.length && now - frameTimes[0] > 2000) frameTimes.shift();
@@ -304,6 +332,9 @@
   }
 
   let activeTabChosenByUser = false;
+  const ROBOT_WARNING_SHOWN_MS = 10000;
+  let robotWarningTimer = null;
+  let lastRobotWarning = null;
 
   function renderState(patch) {
     const s = ui.state;
@@ -333,7 +364,22 @@
       b.textContent = s.recording ? 'Stop recording' : 'Start recording';
       b.classList.toggle('recording', !!s.recording);
     }
-    if ('teach' in patch || 'warnings' in patch) renderTeach();
+    if ('robot_warning' in patch) {
+      // The app reports a warning as long as it holds (checked every 0.5 s); one not renewed for
+      // ROBOT_WARNING_SHOWN_MS is over and must not stay on screen as if it were current.
+      const el = $('banner-robot-warning');
+      clearTimeout(robotWarningTimer);
+      el.hidden = !s.robot_warning;
+      el.textContent = s.robot_warning
+        ? `Robot warning (${new Date().toLocaleTimeString()}): ${s.robot_warning}` : '';
+      if (s.robot_warning) {
+        if (s.robot_warning !== lastRobotWarning) logLine(`robot warning: ${s.robot_warning}`);
+        robotWarningTimer = setTimeout(() => { el.hidden = true; }, ROBOT_WARNING_SHOWN_MS);
+      }
+      lastRobotWarning = s.robot_warning;
+    }
+    if ('teach' in patch || 'warnings' in patch || 'drive' in patch) renderTeach();
+    if ('offline' in patch) drawTopView();
     if ('map_summary' in patch) renderSummary();
     if ('replay' in patch) renderReplay();
     if ('stop_reason' in patch) {
@@ -350,7 +396,7 @@
     const d = ui.state.drive || {};
     fillKv('teach-kv', [
       ['key images', String((t.key_images || []).length)],
-      ['distance', fmt(t.distance_m, 2, ' m')],
+      ['distance (map)', fmt(t.distance_m, 2, ' m')],
       ['features now', t.n_lines !== undefined ? `${t.n_lines} lines, ${t.n_points} points` : '--'],
       ['command', `${fmt(d.v_m_s)} m/s, ${fmt(d.omega_rad_s)} rad/s`],
     ]);
@@ -394,8 +440,8 @@
     const r = ui.state.replay || {};
     const loc = r.localisation || {};
     const el = $('localisation');
-    if (loc.ok === undefined) {
-      el.textContent = `localisation: ${r.state || '--'}`;
+    if (loc.ok === undefined) {  // never the replay state: that is in the progress line
+      el.textContent = 'localisation: --';
       el.className = 'localisation';
     } else {
       el.textContent = `localisation: ${loc.ok ? 'OK' : 'failed'}`
@@ -408,8 +454,11 @@
     const frac = (typeof r.distance_m === 'number' && r.total_m > 0)
       ? r.distance_m / r.total_m : (n > 1 && typeof k === 'number' ? k / (n - 1) : 0);
     $('progress-bar').style.width = `${Math.max(0, Math.min(1, frac)) * 100}%`;
-    $('progress-text').textContent = `key image ${k ?? '--'} of ${n ?? '--'} · `
-      + `${fmt(r.distance_m, 2)} / ${fmt(r.total_m, 2)} m · ${r.state || ''}`;
+    // Key images are numbered 0..n-1, as on the console ("furthest key image 4 of 4").
+    const last = typeof n === 'number' ? n - 1 : undefined;
+    $('progress-text').textContent = `key image ${k ?? '--'} of ${last ?? '--'} · `
+      + `${fmt(r.distance_m, 2)} / ${fmt(r.total_m, 2)} m · ${r.state || ''}`
+      + (r.outcome ? ` (${r.outcome})` : '');
   }
 
   // ------------------------------------------------------------------ plots
@@ -553,9 +602,15 @@
     fillKv('offline-kv', [
       ['taught', `${taught.length} poses`],
       ['replayed', `${replayed.length} poses`],
-      ['max lateral error', fmt(o.max_lateral_error_m, 3, ' m')],
-      ['mean lateral error', fmt(o.mean_lateral_error_m, 3, ' m')],
+      // Lateral error needs ground truth: the simulated robot has it, a real one does not.
+      ['max lateral error', lateral(o.max_lateral_error_m)],
+      ['mean lateral error', lateral(o.mean_lateral_error_m)],
     ]);
+  }
+
+  function lateral(x) {
+    if (ui.state.robot_kind === 'real') return 'needs ground truth (simulated robot only)';
+    return typeof x === 'number' ? `${x.toFixed(3)} m (ground truth)` : '--';
   }
 
   // ------------------------------------------------------------------ driving (dead-man)
@@ -728,6 +783,7 @@
   }, PING_PERIOD_MS);
 
   showLimits();
+  setLive(false);
   renderTeach();
   drawTopView();
   schedulePlots();

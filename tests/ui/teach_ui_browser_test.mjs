@@ -159,7 +159,8 @@ async function main() {
     await run.step('replay view shows key strip, progress, thumbnails and plots', async () => {
       await page.waitForFunction(() => document.querySelectorAll('#key-strip .key img[src]').length === 12,
         null, { timeout: 10000 });
-      await page.waitForFunction(() => /of 12/.test(document.getElementById('progress-text').textContent),
+      // 12 key images, numbered 0..11 as on the app's console ("key image K of 11").
+      await page.waitForFunction(() => /of 11/.test(document.getElementById('progress-text').textContent),
         null, { timeout: 10000 });
       await page.waitForSelector('#img-in[src]', { timeout: 10000 });
       await expectFramesAdvance(page, 10);

@@ -10,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "commands/error_advice.hpp"
 #include "core/camera/intrinsics.hpp"
 
 namespace pepper::app {

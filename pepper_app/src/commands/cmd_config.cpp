@@ -31,7 +31,7 @@ void register_config_command(CLI::App& app) {
       std::cout << json_to_yaml(config_to_json(load_app_config(*sources)));
       exit_code() = 0;
     } catch (const std::exception& e) {
-      exit_code() = report_error(e.what());
+      exit_code() = report_exception(e);
     }
   });
   auto* doc = cmd->add_subcommand(

@@ -217,7 +217,7 @@ int run_demo(const DemoArgs& args) {
     std::cerr << "report: " << std::filesystem::absolute(report_file).string() << "\n";
     return replayed.tour_complete ? 0 : 1;
   } catch (const std::exception& e) {
-    return report_error(e.what());
+    return report_exception(e);
   }
 }
 

@@ -87,7 +87,7 @@ int run_evaluate(const EvaluateArgs& a) {
       throw std::invalid_argument("--controller must be ibvs or vnhv, got '" + a.controller + "'");
     }
   } catch (const std::invalid_argument& e) {
-    std::cerr << "pepper_app evaluate: " << e.what() << "\n";
+    std::cerr << "pepper_app evaluate: " << message_with_next_step(e) << "\n";
     return 2;
   }
   try {
@@ -104,7 +104,7 @@ int run_evaluate(const EvaluateArgs& a) {
     o.arrival_tolerance_m = config.replay.arrival_tolerance_m;
     o.arrival_tolerance_rad = config.replay.arrival_tolerance_rad;
   } catch (const std::exception& e) {
-    std::cerr << "pepper_app evaluate: " << e.what() << "\n";
+    std::cerr << "pepper_app evaluate: " << message_with_next_step(e) << "\n";
     return 2;
   }
   o.starts = a.starts;
@@ -247,7 +247,7 @@ void register_evaluate_command(CLI::App& app) {
     try {
       exit_code() = run_evaluate(*args);
     } catch (const std::exception& e) {
-      std::cerr << "pepper_app evaluate: " << e.what() << "\n";
+      std::cerr << "pepper_app evaluate: " << message_with_next_step(e) << "\n";
       exit_code() = 1;
     }
   });

@@ -36,7 +36,7 @@ int run_map_info(const MapInfoArgs& a) {
     if (a.full) std::cout << "all files present and checksums verified\n";
     return 0;
   } catch (const std::exception& e) {
-    return report_error(e.what());
+    return report_exception(e);
   }
 }
 
@@ -63,7 +63,7 @@ int run_map_build(const MapBuildArgs& a) {
     std::cout << "map written to " << a.map << "\n";
     return 0;
   } catch (const std::exception& e) {
-    return report_error(e.what());
+    return report_exception(e);
   }
 }
 

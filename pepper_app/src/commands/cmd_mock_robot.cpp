@@ -15,6 +15,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "commands/error_advice.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
 #include "naoqi_bridge/qi/session.hpp"
 #include "sim/mock_robot.hpp"
@@ -288,7 +289,7 @@ void register_mock_robot_command(CLI::App& app) {
     try {
       exit_code() = run_mock_robot(*args);
     } catch (const std::exception& e) {
-      std::cerr << "pepper_app mock-robot: " << e.what() << "\n";
+      std::cerr << "pepper_app mock-robot: " << message_with_next_step(e) << "\n";
       exit_code() = 1;
     }
   });

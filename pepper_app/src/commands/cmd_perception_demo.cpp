@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "commands/commands.hpp"
+#include "commands/error_advice.hpp"
 #include "core/camera/intrinsics_io.hpp"
 #include "core/features/image_features.hpp"
 #include "core/features/matching.hpp"
@@ -40,14 +41,16 @@ cv::Scalar colour(size_t i) {
 int run(const PerceptionDemoOptions& o) {
   std::vector<std::string> paths = o.images.empty() ? default_images() : o.images;
   if (paths.size() < 2 || paths.size() > 3) {
-    std::cerr << "pepper_app: error: --images takes 2 or 3 files\n";
+    std::cerr << "pepper_app: error: --images takes 2 or 3 files, got " << paths.size()
+              << ": give two or three image files of one scene\n";
     return 2;
   }
   std::vector<cv::Mat> colour_images, grey;
   for (const auto& p : paths) {
     const cv::Mat img = cv::imread(p, cv::IMREAD_UNCHANGED);
     if (img.empty()) {
-      std::cerr << "pepper_app: error: cannot read image " << p << "\n";
+      std::cerr << "pepper_app: error: cannot read image " << p
+                << ": check the path (a PNG or JPEG file)\n";
       return 1;
     }
     grey.push_back(feat::to_gray(img));
@@ -174,7 +177,7 @@ void register_perception_demo_command(CLI::App& app) {
     try {
       exit_code() = run(*opts);
     } catch (const std::exception& e) {
-      std::cerr << "pepper_app: error: " << e.what() << "\n";
+      std::cerr << "pepper_app: error: " << message_with_next_step(e) << "\n";
       exit_code() = 1;
     }
   });

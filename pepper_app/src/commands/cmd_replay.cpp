@@ -132,7 +132,8 @@ int run_replay(const ReplayArgs& a) {
     // One result line: the outcome, why, and how far the replay came.
     std::cerr << "replay " << r.outcome << ": ";
     if (!r.error.empty()) {
-      std::cerr << r.error << "; ";
+      const std::string step = next_step_for(r.error_exception);
+      std::cerr << r.error << (step.empty() ? "" : ": " + step) << "; ";
     } else if (!r.detail.empty()) {
       std::cerr << r.detail << "; ";
     }
@@ -144,12 +145,8 @@ int run_replay(const ReplayArgs& a) {
                 << "\n";
     }
     return replay_exit_code(r);
-  } catch (const ConfigError& e) {  // before anything moved: what to change is in the message
-    report_error(e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    report_error(e.what());
-    return 4;
+  } catch (const std::exception& e) {  // a ConfigError is 2: refused before anything moved
+    return report_exception(e, 4);
   }
 }
 

@@ -53,12 +53,15 @@ int run_replay_log(const ReplayLogArgs& a) {
     if (!a.json_out.empty()) {
       std::ofstream out(a.json_out);
       out << result.to_json().dump(1) << "\n";
-      if (!out) return report_error(a.json_out + ": cannot write");
+      if (!out) {
+        return report_error(a.json_out +
+                            ": cannot write: check that its folder exists and is writable");
+      }
       std::cout << "per-frame log written to " << a.json_out << "\n";
     }
     return 0;
   } catch (const std::exception& e) {
-    return report_error(e.what());
+    return report_exception(e);
   }
 }
 

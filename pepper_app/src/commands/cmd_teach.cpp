@@ -1,7 +1,9 @@
 // `pepper_app teach --robot URL --map DIR`: teach a tour (record frames, pick key images online,
 // save the map). See pepper_app/src/session/teach_session.hpp and docs/user_guide.md.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 
@@ -80,7 +82,9 @@ int run_teach(const TeachArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
-    if (a.scripted && a.manual) return report_error("--scripted and --manual exclude each other");
+    if (a.scripted && a.manual) return report_error(
+          "--scripted and --manual exclude each other: drop one (--scripted drives the mock "
+          "world's path, --manual drives from the UI)");
     TeachSessionOptions o;
     o.map_dir = a.map;
     o.recording_dir =
@@ -137,9 +141,20 @@ int run_teach(const TeachArgs& a) {
     for (const auto& w : r.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
     std::cerr << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
               << o.recording_dir.string() << ", " << r.distance_m << " m";
-    if (r.map_saved) std::cerr << "; map with " << r.key_images << " key images saved to " << a.map;
+    if (r.map_saved) {
+      std::cerr << "; map with " << r.key_images << " key images";
+      // NaN: a map without distances (no odometry and no commanded speeds recorded).
+      if (std::isfinite(r.map_length_m)) {
+        std::cerr << " and " << std::fixed << std::setprecision(2) << r.map_length_m
+                  << std::defaultfloat << " m";
+      }
+      std::cerr << " saved to " << a.map;
+    }
     std::cerr << "\n";
-    if (!r.error.empty()) return report_error(r.error);
+    if (!r.error.empty()) {
+      const std::string step = next_step_for(r.error_exception);
+      return report_error(r.error + (step.empty() ? "" : ": " + step));
+    }
     if (r.outcome == "interrupted") return 130;
     return r.map_saved ? 0 : 1;
   } catch (const std::exception& e) {
@@ -147,7 +162,7 @@ int run_teach(const TeachArgs& a) {
       std::error_code ec;
       fs::rename(previous, map_dir, ec);
     }
-    return report_error(e.what());
+    return report_exception(e);
   }
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "commands/commands.hpp"
+#include "commands/error_advice.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/world.hpp"
 #include "sim/world_generator.hpp"
@@ -98,7 +99,7 @@ int run_generate(const WorldArgs& a) {
   try {
     o.kind = sim::world_kind_from_string(a.kind);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "pepper_app world generate: --kind: " << e.what() << "\n";
+    std::cerr << "pepper_app world generate: --kind: " << message_with_next_step(e) << "\n";
     return 2;
   }
   o.poor_view_fraction = a.poor_view_fraction;
@@ -166,7 +167,7 @@ void register_world_command(CLI::App& app) {
     try {
       exit_code() = run_check(*args);
     } catch (const std::exception& e) {
-      std::cerr << "pepper_app world check: " << e.what() << "\n";
+      std::cerr << "pepper_app world check: " << message_with_next_step(e) << "\n";
       exit_code() = 1;
     }
   });
@@ -195,7 +196,7 @@ void register_world_command(CLI::App& app) {
     try {
       exit_code() = run_render(*args);
     } catch (const std::exception& e) {
-      std::cerr << "pepper_app world render: " << e.what() << "\n";
+      std::cerr << "pepper_app world render: " << message_with_next_step(e) << "\n";
       exit_code() = 1;
     }
   });
@@ -226,7 +227,7 @@ void register_world_command(CLI::App& app) {
     try {
       exit_code() = run_generate(*args);
     } catch (const std::exception& e) {
-      std::cerr << "pepper_app world generate: " << e.what() << "\n";
+      std::cerr << "pepper_app world generate: " << message_with_next_step(e) << "\n";
       exit_code() = 1;
     }
   });

@@ -12,6 +12,7 @@
 #include "session/recording.hpp"
 #include "session/robot_supervision.hpp"
 #include "session/signals.hpp"
+#include "session/taught_path.hpp"
 #include "session/telemetry_json.hpp"
 
 namespace pepper::app {
@@ -158,6 +159,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
 
   std::optional<nav::Navigator> navigator;
   std::optional<RecordingWriter> writer;
+  nlohmann::json last_replay_state = nlohmann::json::object();  // the page's last `replay`
+  double total_m = 0.0;
   std::ofstream telemetry;
   try {
     link.publish_state({{"mode", "replay"},
@@ -188,6 +191,16 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (link.has_ui()) link.publish_thumbnail("key/" + std::to_string(i), f.gray);
     }
     link.publish_state({{"teach", {{"key_images", keys}}}});
+    // The progress bar's metres: the map's own distances (KeyImage::travelled_m, what `map info`
+    // prints), reached at the last key image passed (IP); NaN in maps without them.
+    std::vector<double> key_distance_m;
+    for (const auto& k : map.key_images) {
+      key_distance_m.push_back(k.travelled_m - map.key_images.front().travelled_m);
+    }
+    total_m = key_distance_m.empty() ? 0.0 : key_distance_m.back();
+    const auto json_m = [](double m) {
+      return std::isfinite(m) ? nlohmann::json(m) : nlohmann::json(nullptr);
+    };
     if (!step_override) navigator.emplace(std::move(map), options.navigator);
     const auto key_gray = [&](int i) -> cv::Mat {
       if (!navigator || i < 0 || i >= result.key_image_count) return {};
@@ -209,6 +222,11 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     int64_t last_moving_t_ns = -1;
     int best_candidate = -1, best_candidate_count = 0;  // last localisation attempt's best
     int64_t last_localising_event_ns = std::numeric_limits<int64_t>::min() / 2;
+    // The last localisation attempt's verdict stays on the page until the next attempt.
+    nlohmann::json last_localisation = {{"ok", false}, {"detail", "not yet tried"}};
+    // Lateral error against the taught path: ground truth, so the mock robot only.
+    double max_lateral_m = 0.0, sum_lateral_m = 0.0;
+    int64_t n_lateral = 0;
     nlohmann::json replayed = nlohmann::json::array();
     if (!options.taught_path_m.empty()) {  // constant: sent once, not with every "trajectory"
       nlohmann::json taught = nlohmann::json::array(), taught_keys = nlohmann::json::array();
@@ -234,7 +252,9 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         break;
       }
       if (bridge.state() == nb::ConnectionState::kLost) {
-        end_with("connection_lost", "connection to the robot lost");
+        end_with("connection_lost",
+                 "connection to the robot lost: check the network and the robot "
+                 "(`pepper_app doctor --robot URL`), then replay again");
         break;
       }
       // The robot's own view (executed velocity, head lock): before this frame's command.
@@ -247,7 +267,9 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (!frame) {
         if (Clock::now() - last_frame_at > std::chrono::milliseconds(options.frame_timeout_ms)) {
           end_with("frame_timeout",
-                   "no camera frame for " + std::to_string(options.frame_timeout_ms) + " ms");
+                   "no camera frame for " + std::to_string(options.frame_timeout_ms) +
+                       " ms: check the camera with `pepper_app doctor --robot URL` (another "
+                       "program holding it, or a slow network)");
           break;
         }
         if (options.monitor) {
@@ -322,14 +344,29 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         s.yaw_rad = gt.base.yaw_rad;
         line["ground_truth"] = {{"x_m", s.x_m}, {"y_m", s.y_m}, {"yaw_rad", s.yaw_rad}};
         replayed.push_back({s.x_m, s.y_m});
+        const double lateral_m =
+            distance_to_path_m(options.taught_path_m, Eigen::Vector2d(s.x_m, s.y_m));
+        if (std::isfinite(lateral_m)) {
+          max_lateral_m = std::max(max_lateral_m, lateral_m);
+          sum_lateral_m += lateral_m;
+          ++n_lateral;
+        }
         if (link.has_ui() && result.frames % 5 == 0) {
-          link.publish_state({{"trajectory", {{"replayed", replayed}}},
-                              {"pose", line["ground_truth"]}});
+          nlohmann::json patch = {{"trajectory", {{"replayed", replayed}}},
+                                  {"pose", line["ground_truth"]}};
+          if (n_lateral > 0) {
+            patch["offline"] = {{"max_lateral_error_m", max_lateral_m},
+                                {"mean_lateral_error_m", sum_lateral_m / n_lateral},
+                                {"source", "ground_truth"}};
+          }
+          link.publish_state(patch);
         }
         if (robot.mock->collided()) {
           result.samples.push_back(s);
           if (options.monitor) options.monitor->after_iteration(&step, &result.samples.back());
-          end_with("collision", "collision with " + (gt.collision ? gt.collision->what : "?"));
+          end_with("collision", "collision with " + (gt.collision ? gt.collision->what : "?") +
+                                    " (simulated robot): start it elsewhere (--mock-start) or "
+                                    "re-teach the tour away from it");
           break;
         }
       }
@@ -343,21 +380,32 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
             t.overlay, t.overlay.key_index < 0
                            ? std::string("matched")
                            : "IN " + std::to_string(t.overlay.key_index) + " matched");
+        // The caption's counts are the navigator's matches with IN before verification; the
+        // legend counts the verified ones drawn: say which is which.
         overlay["text"] = nlohmann::json::array(
             {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
-             std::to_string(t.in) + "  lines " + std::to_string(t.n_lines_next) + "  points " +
-             std::to_string(t.n_points_next)});
+             std::to_string(t.in) + "  matches with IN: lines " + std::to_string(t.n_lines_next) +
+             ", points " + std::to_string(t.n_points_next)});
         link.publish_frame(*frame, overlay);
         link.publish_samples({{"t_s", s.t_s},
                               {"v_m_s", s.v_m_s},
                               {"omega_rad_s", s.omega_rad_s},
                               {"n_lines", s.n_lines},
                               {"n_points", s.n_points}});
+        if (t.localization_ran) last_localisation = localisation_json(t, options);
+        const int passed = std::clamp(t.ip, 0, std::max(0, result.key_image_count - 1));
         nlohmann::json replay_state = {
             {"state", replay_state_name(t.state)},
             {"key_index", t.in >= 0 ? nlohmann::json(t.in) : nlohmann::json(nullptr)},
-            {"key_count", result.key_image_count}};
-        if (t.localization_ran) replay_state["localisation"] = localisation_json(t, options);
+            {"key_count", result.key_image_count},
+            {"max_key_reached", result.max_key_reached},
+            {"frames", result.frames},
+            {"distance_m", t.ip >= 0 && !key_distance_m.empty()
+                               ? json_m(key_distance_m[passed])
+                               : nlohmann::json(0.0)},
+            {"total_m", json_m(total_m)},
+            {"localisation", last_localisation}};
+        last_replay_state = replay_state;
         link.publish_state({{"replay", replay_state},
                             {"drive", {{"v_m_s", s.v_m_s}, {"omega_rad_s", s.omega_rad_s}}}});
         if (t.in != last_in) {
@@ -373,9 +421,6 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         result.arrival =
             judge_arrival(t, options.arrival_tolerance_m, options.arrival_tolerance_rad);
         end_with("tour_complete", arrival_detail(result.arrival));
-        link.publish_state({{"replay", {{"state", "finished"},
-                                        {"key_index", t.in},
-                                        {"key_count", result.key_image_count}}}});
         break;
       }
       if (t.state == nav::NavState::kOverdue) {
@@ -405,7 +450,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         break;
       }
       if (options.max_frames > 0 && result.frames >= options.max_frames) {
-        end_with("max_frames", "frame limit reached");
+        end_with("max_frames", "frame limit (--max-frames " + std::to_string(options.max_frames) +
+                                   ") reached: drop --max-frames to replay the whole tour");
         break;
       }
       if (options.pace_hz > 0) {
@@ -420,6 +466,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     link.command_event(0.0, 0.0, true, "error");
     result.outcome = bridge.state() == nb::ConnectionState::kLost ? "connection_lost" : "error";
     result.error = e.what();
+    result.error_exception = std::current_exception();
     link.publish_state({{"stop_reason", std::string("error: ") + e.what()}});
   }
   bridge.release();
@@ -431,6 +478,29 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                {"lateral_m", result.arrival.lateral_m},
                {"heading_rad", result.arrival.heading_rad},
                {"offset_m", result.arrival.offset_m}};
+  }
+  // The final figures, from the same result as the replay_done event and the console line.
+  {
+    const int last_key = result.key_image_count - 1;
+    nlohmann::json final_state = last_replay_state;
+    final_state.update(nlohmann::json{
+        {"state", result.tour_complete ? "finished" : "stopped"},
+        {"outcome", result.outcome},
+        {"key_index", result.max_key_reached >= 0 ? nlohmann::json(result.max_key_reached)
+                                                   : nlohmann::json(nullptr)},
+        {"max_key_reached", result.max_key_reached},
+        {"key_count", result.key_image_count},
+        {"frames", result.frames},
+        {"arrival", arrival}});
+    if (result.tour_complete && last_key >= 0) {
+      final_state["key_index"] = last_key;
+      if (std::isfinite(total_m)) final_state["distance_m"] = total_m;
+    }
+    link.publish_state({{"replay", final_state},
+                        {"drive", {{"v_m_s", 0.0}, {"omega_rad_s", 0.0}}},
+                        {"connection", {{"robot", "disconnected"},
+                                        {"head_locked", false},
+                                        {"detail", "replay ended (" + result.outcome + ")"}}}});
   }
   link.event({{"event", "replay_done"},
               {"outcome", result.outcome},

@@ -20,6 +20,7 @@
 // Threads: none of its own. Errors end in ReplayResult (never thrown) after the stop.
 
 #include <cstdint>
+#include <exception>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -123,6 +124,7 @@ struct ReplayResult {
                         ///< or a ReplayMonitor's outcome
   std::string detail;   ///< one sentence on why it ended
   std::string error;
+  std::exception_ptr error_exception;  ///< the exception behind `error` (its type gives advice)
   int64_t frames = 0;
   int key_image_count = 0;
   int max_key_reached = -1;

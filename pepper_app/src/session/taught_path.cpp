@@ -1,6 +1,8 @@
 #include "session/taught_path.hpp"
 
+#include <algorithm>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -70,6 +72,18 @@ std::optional<TaughtPath> load_taught_path(const fs::path& map_dir) {
   } catch (const std::exception& e) {  // json errors and the checks above
     throw std::runtime_error(file.string() + ": not a taught path: " + e.what());
   }
+}
+
+double distance_to_path_m(const std::vector<Eigen::Vector2d>& path_m, const Eigen::Vector2d& p_m) {
+  if (path_m.empty()) return std::numeric_limits<double>::quiet_NaN();
+  double best = (p_m - path_m.front()).norm();
+  for (std::size_t i = 1; i < path_m.size(); ++i) {
+    const Eigen::Vector2d a = path_m[i - 1], ab = path_m[i] - a;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p_m - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (p_m - (a + t * ab)).norm());
+  }
+  return best;
 }
 
 }  // namespace pepper::app

@@ -33,4 +33,8 @@ void save_taught_path(const std::filesystem::path& map_dir, const TaughtPath& pa
 /// the file when it is not a valid taught path.
 std::optional<TaughtPath> load_taught_path(const std::filesystem::path& map_dir);
 
+/// Distance (m) from `p_m` to the polyline `path_m` (a single point: the distance to it);
+/// NaN for an empty path. The replay's lateral error against ground truth on the mock robot.
+double distance_to_path_m(const std::vector<Eigen::Vector2d>& path_m, const Eigen::Vector2d& p_m);
+
 }  // namespace pepper::app

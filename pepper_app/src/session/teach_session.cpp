@@ -39,8 +39,14 @@ std::vector<std::string> TeachSessionOptions::validate() const {
 
 namespace {
 
-nlohmann::json teach_state(const TeachResult& r, const nlohmann::json& keys) {
-  return {{"key_images", keys}, {"distance_m", r.distance_m}};
+/// The teach panel's facts. `map_distance_m` is the map's own measure (the odometer that
+/// writes KeyImage::travelled_m), so the live figure ends where `map info`'s "driven" does.
+nlohmann::json teach_state(double map_distance_m, const nlohmann::json& keys, int n_lines,
+                           int n_points) {
+  return {{"key_images", keys},
+          {"distance_m", map_distance_m},
+          {"n_lines", n_lines},
+          {"n_points", n_points}};
 }
 
 }  // namespace
@@ -76,6 +82,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
 
   try {
     link.publish_state({{"mode", "teach"},
+                        {"robot_kind", robot.mock ? "mock" : "real"},
                         {"connection", {{"robot", "connecting"}, {"head_locked", false}}}});
     bridge.connect();
     const nb::HeadLockStatus head = bridge.lock_head(options.head);
@@ -223,20 +230,23 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           const int k = step.key_image_count - 1;
           // The selector may pick the previous frame: take the position of the frame it chose.
           if (pos) result.key_m.push_back(result.path_m.at(step.new_key_frame.value_or(0)));
-          nlohmann::json key = {{"index", k}, {"distance_m", result.distance_m}, {"weak", false}};
+          nlohmann::json key = {{"index", k}, {"distance_m", travelled_m}, {"weak", false}};
           if (step.new_key_rule) {
             key["rule"] = core::mapping::to_string(*step.new_key_rule);
             if (*step.new_key_rule == core::mapping::KeyImageRule::kHeading) {
               ++result.heading_key_images;
             }
           }
-          if (step.frame_number > 0) {  // the first frame has no counts (nothing to match)
-            key["n_lines"] = step.n_lines_three_view;
-            key["n_points"] = step.n_points_two_view;
-          }
+          // No feature counts yet: the step's counts are three-view matches, not the key
+          // image's own lines and points; the saved map's counts replace the list at the end.
           key_list.push_back(std::move(key));
           link.publish_thumbnail("key/" + std::to_string(k), frame->gray);
-          link.publish_state({{"teach", teach_state(result, key_list)}});
+        }
+        if (link.has_ui()) {
+          const auto& f = teacher->last_frame_features();
+          link.publish_state({{"teach", teach_state(travelled_m, key_list,
+                                                    static_cast<int>(f.lines.size()),
+                                                    static_cast<int>(f.corners_px.size()))}});
         }
         link.publish_samples({{"t_s", (frame->t_ns - t0_ns) * 1e-9},
                               {"distance_m", result.distance_m},
@@ -301,6 +311,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     link.command_event(0.0, 0.0, true, "error");
     result.outcome = "failed";
     result.error = e.what();
+    result.error_exception = std::current_exception();
   }
 
   result.distance_from_odometry_m = odometer.from_odometry_m();
@@ -356,9 +367,33 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                                     "re-teach this part");
         }
       }
+      // The panel, the strip and the "Map saved" box all show the saved map: its key images
+      // (finish() may have added the last frame), their own feature counts, its driven length.
+      const double map_length_m =
+          summary.key_images.empty()
+              ? 0.0
+              : summary.key_images.back().travelled_m - summary.key_images.front().travelled_m;
+      result.map_length_m = map_length_m;
+      nlohmann::json saved_keys = nlohmann::json::array();
+      const double first_m = summary.key_images.empty() ? 0.0 : summary.key_images[0].travelled_m;
+      for (std::size_t i = 0; i < summary.key_images.size(); ++i) {
+        const auto& k = summary.key_images[i];
+        const bool is_weak = k.lines + k.corners < options.min_key_features;
+        nlohmann::json key = {{"index", i},
+                              {"n_lines", k.lines},
+                              {"n_points", k.corners},
+                              {"distance_m", k.travelled_m - first_m},
+                              {"weak", is_weak}};
+        if (i < key_list.size() && key_list[i].contains("rule")) key["rule"] = key_list[i]["rule"];
+        saved_keys.push_back(std::move(key));
+        if (link.has_ui()) {
+          link.publish_thumbnail("key/" + std::to_string(i), map.key_images[i].features.gray);
+        }
+      }
+      link.publish_state({{"teach", {{"key_images", saved_keys}, {"distance_m", map_length_m}}}});
       link.publish_state({{"map_summary",
                            {{"key_images", summary.key_image_count},
-                            {"length_m", result.distance_m},
+                            {"length_m", map_length_m},
                             {"min_lines", min_lines},
                             {"min_points", min_points},
                             {"weak_key_images", weak},
@@ -376,6 +411,12 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     result.warnings.push_back("map not saved: fewer than 2 frames taught");
   }
   bridge.release();
+  // The page must not show a live session after it ended: recording off, robot released.
+  link.publish_state({{"recording", false},
+                      {"drive", {{"v_m_s", 0.0}, {"omega_rad_s", 0.0}}},
+                      {"connection", {{"robot", "disconnected"},
+                                      {"head_locked", false},
+                                      {"detail", "teach ended (" + result.outcome + ")"}}}});
   link.event({{"event", "teach_done"},
               {"outcome", result.outcome},
               {"error", result.error},

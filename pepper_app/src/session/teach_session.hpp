@@ -17,6 +17,7 @@
 // Threads: none of its own. Errors are reported in TeachResult (never thrown) after the stop.
 
 #include <cstdint>
+#include <exception>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -55,11 +56,15 @@ struct TeachSessionOptions {
 struct TeachResult {
   std::string outcome;  ///< "finished", "interrupted", "failed"
   std::string error;    ///< what failed ("" otherwise)
+  std::exception_ptr error_exception;  ///< the exception behind `error` (its type gives advice)
   int64_t frames_recorded = 0;  ///< frames taught (and written, when recording)
   int64_t frames_seen = 0;
   int key_images = 0;
   bool map_saved = false;
-  double distance_m = 0.0;
+  double distance_m = 0.0;  ///< driven (ground truth on the mock, else the map's measure)
+  /// The saved map's driven length (last key image's travelled_m minus the first's, as
+  /// `map info` prints it); what the UI's teach panel and "Map saved" box show. 0 when unsaved.
+  double map_length_m = 0.0;
   /// Of the map's driven distance, the part the robot's odometry measured (the rest: commanded
   /// speeds, for frames without odometry).
   double distance_from_odometry_m = 0.0;

@@ -109,7 +109,9 @@ class UiServer {
   /// Validates the options, binds, listens and starts the I/O thread. Throws UiServerError.
   /// Calling start() on a running server throws too.
   void start();
-  /// Closes every connection (a driving client's connection first queues its kDriveReleased) and
+  /// Sends what is queued for the open pages (state, images, samples: not frames) for at most
+  /// 0.5 s, so that an app's last publish_state reaches them, then
+  /// closes every connection (a driving client's connection first queues its kDriveReleased) and
   /// joins the I/O thread. Idempotent; never throws. Intents already queued stay readable with
   /// next_intent(). Do not call it from the intent handler (it would join its own thread).
   void stop();
