@@ -458,7 +458,16 @@
     const last = typeof n === 'number' ? n - 1 : undefined;
     $('progress-text').textContent = `key image ${k ?? '--'} of ${last ?? '--'} · `
       + `${fmt(r.distance_m, 2)} / ${fmt(r.total_m, 2)} m · ${r.state || ''}`
-      + (r.outcome ? ` (${r.outcome})` : '');
+      + (r.outcome ? ` (${r.outcome})` : '')
+      + arrivalText(r.arrival);
+  }
+
+  // The replay's own verdict at the end of the tour (no ground truth): arrived / not aligned.
+  function arrivalText(a) {
+    if (!a || !a.verdict) return '';
+    if (a.verdict === 'unknown') return ' · arrival unknown (no estimate)';
+    const cm = typeof a.offset_m === 'number' ? `${(100 * a.offset_m).toFixed(0)} cm` : '--';
+    return ` · ${a.verdict === 'arrived' ? 'arrived' : 'not aligned'}, ${cm} off (${a.source})`;
   }
 
   // ------------------------------------------------------------------ plots

@@ -231,6 +231,13 @@ async function replayStep() {
         bad.push(`page last key ${shownKey[2]}, replay_done key_images ${done.key_images}`);
       }
       if (!progress.includes(`(${done.outcome})`)) bad.push(`progress "${progress}", outcome ${done.outcome}`);
+      if (done.tour_complete) {
+        // The arrival verdict shown is replay_done's.
+        const shown = { arrived: 'arrived', not_aligned: 'not aligned', unknown: 'arrival unknown' };
+        if (!done.arrival || !progress.includes(shown[done.arrival.verdict])) {
+          bad.push(`progress "${progress}", arrival ${JSON.stringify(done.arrival)}`);
+        }
+      }
       if (done.key_images !== info.count) bad.push(`replay_done ${done.key_images} key images, map ${info.count}`);
       if (robot === 'robot: connected') bad.push('robot still "connected" after the replay');
       if (bad.length) throw new Error(bad.join('; '));
