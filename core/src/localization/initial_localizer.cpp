@@ -127,9 +127,13 @@ InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
   // robot after a loss). Where one of them has enough verified matches on its own, the robot is
   // there: a look-alike elsewhere on the tour (the same poster or door further on) must not
   // win by a few more matches. The rule then runs on the expected images and their neighbours.
+  // With the prior, half the evidence suffices (the expected images are where the robot was
+  // put or where odometry says it is: a chance match must also fall on them to mislead).
+  InitialLocalizationOptions prior_rule = options.rule;
+  prior_rule.min_best_count = (options.rule.min_best_count + 1) / 2;
   int best_expected = -1;
   for (const int k : expected) {
-    if (k >= 0 && k < n && report.counts[k] >= options.rule.min_best_count &&
+    if (k >= 0 && k < n && report.counts[k] >= prior_rule.min_best_count &&
         (best_expected < 0 || report.counts[k] > report.counts[best_expected])) {
       best_expected = k;
     }
@@ -141,7 +145,7 @@ InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
     for (int k = best_expected - 1; k <= best_expected + 1; ++k) {
       if (k >= 0 && k < n) near[k] = report.counts[k];
     }
-    report.result = localize_from_counts(near, options.rule);
+    report.result = localize_from_counts(near, prior_rule);
     report.from_prior = true;
     return report;
   }
