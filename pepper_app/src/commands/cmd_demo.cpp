@@ -41,6 +41,23 @@ std::string fmt(double v, int prec = 3) {
   return s.str();
 }
 
+/// "1.9 m in 2 stretches" (ground-truth distance of the frames driven on odometry alone).
+std::string blind_summary(const std::vector<ReplaySample>& samples) {
+  double blind_m = 0.0;
+  int stretches = 0;
+  for (size_t i = 1; i < samples.size(); ++i) {
+    const ReplaySample& a = samples[i - 1];
+    const ReplaySample& b = samples[i];
+    if (b.dead_reckoning && !a.dead_reckoning) ++stretches;
+    if (b.dead_reckoning && a.has_pose && b.has_pose) {
+      blind_m += std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+    }
+  }
+  if (stretches == 0) return "none";
+  return fmt(blind_m, 2) + " m in " + std::to_string(stretches) + " stretch" +
+         (stretches == 1 ? "" : "es");
+}
+
 // worlds/robotics_room.yaml from the current folder (the README runs from the checkout), else
 // from the source tree this binary was built from, so `demo` also works from any folder.
 std::string default_world() {
@@ -178,6 +195,7 @@ int run_demo(const DemoArgs& args) {
         {"lateral deviation RMS (after 1 m)", fmt(dev.rms_m * 100, 1) + " cm"},
         {"lateral deviation max (after 1 m)", fmt(dev.max_m * 100, 1) + " cm"},
         {"final position error (ground truth)", fmt(final_error_m * 100, 1) + " cm"},
+        {"driven on odometry alone (vision blind)", blind_summary(replayed.samples)},
         {"replay start", "x " + fmt(start.x_m, 2) + " m, y " + fmt(start.y_m, 2) + " m, yaw " +
                              fmt(start.yaw_rad * 180 / M_PI, 1) + " deg"},
         {"frames (teach / replay)",
@@ -189,8 +207,17 @@ int run_demo(const DemoArgs& args) {
     html.table(table);
     html.heading("Top view (ground truth)");
     report::PlotSpec top{"Taught and replayed paths", "x (m)", "y (m)", 900, 600, true};
+    // Where the replay drove on odometry alone (vision blind, issue 29).
+    report::Series blind{"driven on odometry alone", {}, {}, cv::Scalar(0, 0, 220), 1, true};
+    for (const auto& smp : replayed.samples) {
+      if (smp.dead_reckoning && smp.has_pose) {
+        blind.x.push_back(smp.x_m);
+        blind.y.push_back(smp.y_m);
+      }
+    }
     html.image(report::render_plot(top, {{"taught", tx, ty, report::palette(0)},
-                                         {"replayed", rx, ry, report::palette(1)}}),
+                                         {"replayed", rx, ry, report::palette(1)},
+                                         blind}),
                "Base positions in the world frame");
     html.heading("Control");
     html.image(report::render_plot({"Yaw rate command", "t (s)", "omega (rad/s)"},

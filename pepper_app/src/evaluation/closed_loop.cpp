@@ -247,7 +247,8 @@ class GroundTruthMonitor final : public ReplayMonitor {
         ++run_.lost_frames;
       }
       const nav::Telemetry& tel = step->telemetry;
-      run_.dead_reckoning_frames += tel.state == nav::NavState::kDeadReckoning;
+      smp.dead_reckoning = tel.state == nav::NavState::kDeadReckoning;
+      run_.dead_reckoning_frames += smp.dead_reckoning;
       if (tel.reacquired) {
         run_.reacquisitions.push_back({tel.dead_reckoned_m, tel.dead_reckoned_rad, kNaN, kNaN});
       }

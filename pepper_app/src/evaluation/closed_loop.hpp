@@ -118,6 +118,7 @@ struct RunSample {
   bool frame_received = true; ///< false: dropped by the WiFi model (no navigator step)
   int n_lines = 0, n_points = 0;  ///< verified matches with IN
   int key_next = -1;          ///< IN
+  bool dead_reckoning = false;  ///< driven on odometry alone (vision blind) on this frame
   double step_ms = 0.0;       ///< wall-clock navigator step (NaN when no frame)
 };
 

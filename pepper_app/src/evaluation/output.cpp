@@ -216,15 +216,22 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
       taught.y.push_back(p.y());
     }
     s.push_back(taught);
+    // Where each run drove on odometry alone (vision blind, issue 29), as markers over the paths.
+    report::Series blind{"driven on odometry alone", {}, {}, cv::Scalar(0, 0, 220), 1, true};
     for (const RunResult& r : e.runs) {
       report::Series rs{"run " + std::to_string(r.index + 1) + (r.success ? "" : " (" + r.outcome + ")"),
                         {}, {}, report::palette(r.index + 1), 1};
       for (const RunSample& smp : r.samples) {
         rs.x.push_back(smp.x_m);
         rs.y.push_back(smp.y_m);
+        if (smp.dead_reckoning) {
+          blind.x.push_back(smp.x_m);
+          blind.y.push_back(smp.y_m);
+        }
       }
       s.push_back(rs);
     }
+    s.push_back(blind);
     report::PlotSpec spec{e.world_name + ": taught and replayed paths (" + e.features + ")",
                           "x (m)", "y (m)", 1000, 800, true};
     save(report::render_plot(spec, s), "top_view.png");

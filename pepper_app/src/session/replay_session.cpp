@@ -331,6 +331,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       s.in = t.in;
       s.n_lines = t.n_lines_next;
       s.n_points = t.n_points_next;
+      s.dead_reckoning = t.state == nav::NavState::kDeadReckoning;
       nlohmann::json line = {{"frame", result.frames - 1},
                              {"odom", odometry_to_json(frame->odom)},
                              {"command", command_to_json(c)},
@@ -391,7 +392,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                               {"v_m_s", s.v_m_s},
                               {"omega_rad_s", s.omega_rad_s},
                               {"n_lines", s.n_lines},
-                              {"n_points", s.n_points}});
+                              {"n_points", s.n_points},
+                              {"dead_reckoning", s.dead_reckoning}});
         if (t.localization_ran) last_localisation = localisation_json(t, options);
         const int passed = std::clamp(t.ip, 0, std::max(0, result.key_image_count - 1));
         nlohmann::json replay_state = {

@@ -98,6 +98,7 @@ struct ReplaySample {
   bool stop = true;
   int in = -1;
   int n_lines = 0, n_points = 0;
+  bool dead_reckoning = false;  ///< driven on odometry alone (vision blind) on this frame
   bool has_pose = false;
   double x_m = 0.0, y_m = 0.0, yaw_rad = 0.0;  ///< mock ground truth
 };

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -172,6 +173,12 @@ TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
   EXPECT_TRUE(report["success"].get<bool>());
   EXPECT_LT(report["final_error_m"].get<double>(), 0.3);
   EXPECT_TRUE(fs::exists(report["path"].get<std::string>()));
+  {  // The report says how the replay arrived and where it drove blind (issues 29, 30).
+    std::ifstream in(report["path"].get<std::string>());
+    const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(html.find("arrival (the replay's own estimate)"), std::string::npos);
+    EXPECT_NE(html.find("driven on odometry alone (vision blind)"), std::string::npos);
+  }
 }
 
 // `evaluate` scores the replay loop that users run: the same world, start and seed through
