@@ -23,18 +23,17 @@
 
 #include "core/memory/visual_memory.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
+#include "app/e2e/app_process.hpp"
 #include "naoqi_bridge/qi/session.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/world.hpp"
 
-extern char** environ;
 
 namespace pepper::app {
 namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kBinary = std::string(PEPPER_BINARY_DIR) + "/pepper_app/pepper_app";
 const std::string kWorldFile = std::string(PEPPER_SOURCE_DIR) + "/worlds/robotics_room.yaml";
 const std::vector<std::string> kQvga = {"--set", "robot.camera_width_px=320", "--set",
                                         "robot.camera_height_px=240"};
@@ -46,63 +45,7 @@ fs::path fresh_dir(const std::string& name) {
   return p;
 }
 
-/// A running pepper_app subprocess with stdout/stderr in files.
-class Child {
- public:
-  Child(std::vector<std::string> args, const fs::path& dir, const std::string& name)
-      : out_(dir / (name + ".stdout")), err_(dir / (name + ".stderr")) {
-    args.insert(args.begin(), kBinary);
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int rc = posix_spawn(&pid_, kBinary.c_str(), &fa, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0) throw std::runtime_error("cannot start " + kBinary);
-  }
-  ~Child() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  /// Exit code, or -1 after `limit` (the child is then killed).
-  int wait(std::chrono::seconds limit = std::chrono::seconds(120)) {
-    const auto end = std::chrono::steady_clock::now() + limit;
-    while (std::chrono::steady_clock::now() < end) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    return -1;
-  }
-  void signal(int sig) { kill(pid_, sig); }
-  std::string out() const { return slurp(out_); }
-  std::string err() const { return slurp(err_); }
-  std::string both() const { return "stdout:\n" + out() + "\nstderr:\n" + err(); }
-  static std::string slurp(const fs::path& p) {
-    std::ifstream f(p);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-  }
 
- private:
-  fs::path out_, err_;
-  pid_t pid_ = -1;
-};
-
-std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
 
 /// Last JSON event line of the given kind on stdout.
 nlohmann::json last_event(const std::string& out, const std::string& kind) {
@@ -127,7 +70,7 @@ std::vector<nlohmann::json> read_jsonl(const fs::path& p) {
 
 TEST(AppE2E, TeachThenReplayOnMockRobot) {
   const fs::path dir = fresh_dir("mock");
-  Child teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+  test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
                    "--max-distance", "2.0"},
                   kQvga),
               dir, "teach");
@@ -140,7 +83,7 @@ TEST(AppE2E, TeachThenReplayOnMockRobot) {
   EXPECT_EQ(map.camera.width_px, 320);
   EXPECT_TRUE(fs::exists(dir / "map.recording" / "recording.json"));
 
-  Child replay(cat({"replay", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+  test::AppProcess replay(test::cat({"replay", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
                     "--mock-start", "0", "--seed", "0", "--json", (dir / "replay.jsonl").string(),
                     "--max-frames", "900", "--mock-command-log", (dir / "commands.jsonl").string()},
                    kQvga),
@@ -163,7 +106,7 @@ TEST(AppE2E, TeachThenReplayOnMockRobot) {
 // arrival at the final image (it used to drive 1 m past it, facing a wall with few points).
 TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
   const fs::path dir = fresh_dir("demo");
-  Child demo({"demo", "--out", (dir / "out").string()}, dir, "demo");
+  test::AppProcess demo({"demo", "--out", (dir / "out").string()}, dir, "demo");
   ASSERT_EQ(demo.wait(std::chrono::seconds(240)), 0) << demo.both();
   const auto replay = last_event(demo.out(), "replay_done");
   ASSERT_TRUE(replay.is_object()) << demo.both();
@@ -188,7 +131,7 @@ TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
   const fs::path dir = fresh_dir("equivalence");
   const std::string world =
       std::string(PEPPER_SOURCE_DIR) + "/tests/app/evaluation/data/small_room.yaml";
-  Child eval({"evaluate", "--world", world, "--starts", "2", "--run", "2", "--seed", "3", "--size",
+  test::AppProcess eval({"evaluate", "--world", world, "--starts", "2", "--run", "2", "--seed", "3", "--size",
               "320x240", "--map-dir", (dir / "maps").string(), "--trace",
               (dir / "trace").string(), "--json", (dir / "eval.json").string(), "--quiet"},
              dir, "evaluate");
@@ -200,7 +143,7 @@ TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
   const auto& run = results["evaluations"][0]["runs"][0];
 
   // Run 2 is start index 1.
-  Child replay(cat({"replay", "--robot", "mock:" + world, "--map",
+  test::AppProcess replay(test::cat({"replay", "--robot", "mock:" + world, "--map",
                     (dir / "maps" / "small_room_320x240").string(), "--mock-start", "1", "--seed",
                     "3", "--mock-lighting", "teach", "--json", (dir / "replay.jsonl").string()},
                    kQvga),
@@ -228,7 +171,7 @@ TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
 TEST(AppE2E, SigintDuringTeachKeepsRecordingAndStopsRobot) {
   const fs::path dir = fresh_dir("sigint");
   const fs::path rec = dir / "rec";
-  Child teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+  test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
                    "--recording", rec.string(), "--scripted", "--mock-command-log",
                    (dir / "commands.jsonl").string()},
                   kQvga),
@@ -249,7 +192,7 @@ TEST(AppE2E, SigintDuringTeachKeepsRecordingAndStopsRobot) {
   EXPECT_TRUE(moved);
   EXPECT_TRUE(commands.back()["stop_move"].get<bool>());
   // The recording becomes a valid map offline.
-  Child build({"map", "build", "--recording", rec.string(), "--map", (dir / "built").string()},
+  test::AppProcess build({"map", "build", "--recording", rec.string(), "--map", (dir / "built").string()},
               dir, "build");
   ASSERT_EQ(build.wait(), 0) << build.both();
   const auto map = core::memory::load_map(dir / "built");
@@ -263,7 +206,7 @@ TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
   naoqi_bridge::qi::MockNaoqiServer server(robot);  // lockstep, tcp://127.0.0.1:ephemeral
   server.start();
   // Teach over the wire (the operator does not drive: a short standing tour).
-  Child teach(cat({"teach", "--robot", server.url(), "--map", (dir / "map").string(),
+  test::AppProcess teach(test::cat({"teach", "--robot", server.url(), "--map", (dir / "map").string(),
                    "--max-frames", "25"},
                   kQvga),
               dir, "teach");
@@ -272,7 +215,7 @@ TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
   EXPECT_GE(map.key_images.size(), 2u);
   EXPECT_EQ(map.camera.width_px, 320);
   // Replay over the wire; the robot has not moved, so it sits at the end of this tour.
-  Child replay(cat({"replay", "--robot", server.url(), "--map", (dir / "map").string(),
+  test::AppProcess replay(test::cat({"replay", "--robot", server.url(), "--map", (dir / "map").string(),
                     "--max-frames", "150", "--json", (dir / "replay.jsonl").string()},
                    kQvga),
                dir, "replay");
@@ -292,13 +235,13 @@ TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
 
 TEST(AppE2E, ConfigDumpRoundTrips) {
   const fs::path dir = fresh_dir("config");
-  Child dump({"config", "dump", "--set", "robot.camera_fps=10"}, dir, "dump");
+  test::AppProcess dump({"config", "dump", "--set", "robot.camera_fps=10"}, dir, "dump");
   ASSERT_EQ(dump.wait(), 0) << dump.both();
   {
     std::ofstream f(dir / "c.yaml");
     f << dump.out();
   }
-  Child again({"config", "dump", "--config", (dir / "c.yaml").string()}, dir, "again");
+  test::AppProcess again({"config", "dump", "--config", (dir / "c.yaml").string()}, dir, "again");
   ASSERT_EQ(again.wait(), 0) << again.both();
   EXPECT_EQ(again.out(), dump.out());
   EXPECT_NE(dump.out().find("camera_fps: 10"), std::string::npos) << dump.out();
@@ -309,16 +252,16 @@ TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
   const fs::path dir = fresh_dir("overwrite");
   const std::string map = (dir / "map").string();
   auto teach_args = [&](std::vector<std::string> extra) {
-    return cat(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", map, "--max-distance",
+    return test::cat(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", map, "--max-distance",
                     "0.5"},
                    kQvga),
                extra);
   };
-  Child first(teach_args({}), dir, "first");
+  test::AppProcess first(teach_args({}), dir, "first");
   ASSERT_EQ(first.wait(), 0) << first.both();
   const auto taught = core::memory::load_map(map);
 
-  Child again(teach_args({}), dir, "again");
+  test::AppProcess again(teach_args({}), dir, "again");
   EXPECT_EQ(again.wait(), 2) << again.both();
   EXPECT_NE(again.err().find("--overwrite"), std::string::npos) << again.both();
   EXPECT_NE(again.err().find(std::to_string(taught.key_images.size()) + " key images"),
@@ -326,13 +269,13 @@ TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
       << again.both();
   EXPECT_EQ(core::memory::load_map(map).key_images.size(), taught.key_images.size());
 
-  Child replaced(teach_args({"--overwrite"}), dir, "replaced");
+  test::AppProcess replaced(teach_args({"--overwrite"}), dir, "replaced");
   EXPECT_EQ(replaced.wait(), 0) << replaced.both();
   EXPECT_FALSE(fs::exists(dir / "map.previous"));
   EXPECT_NO_THROW(core::memory::load_map(map));
 
   // Replay with the default (VGA) configuration: the QVGA map decides, and says so.
-  Child replay({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--max-frames", "20"},
+  test::AppProcess replay({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--max-frames", "20"},
                dir, "replay");
   EXPECT_EQ(replay.wait(), 1) << replay.both();  // 1: ended (frame limit) before the end
   EXPECT_NE(replay.err().find("camera 320x240, the size the map was taught at"),
@@ -343,7 +286,7 @@ TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
   EXPECT_EQ(err.find("replay max_frames"), err.rfind("replay max_frames")) << err;
 
   // An explicit conflicting size is refused before connecting, naming what to drop.
-  Child vga({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--set",
+  test::AppProcess vga({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--set",
              "robot.camera_width_px=640", "--set", "robot.camera_height_px=480"},
             dir, "vga");
   EXPECT_EQ(vga.wait(), 2) << vga.both();
@@ -360,7 +303,7 @@ std::vector<std::vector<std::string>> command_paths(const fs::path& dir) {
     if (!path.empty()) out.push_back(path);
     auto args = path;
     args.push_back("--help");
-    Child help(args, dir, "help");
+    test::AppProcess help(args, dir, "help");
     help.wait();
     std::istringstream in(help.out());
     bool in_subcommands = false;
@@ -398,7 +341,7 @@ TEST(AppE2E, HelpExamplesNameFilesThatExist) {
   for (const auto& path : paths) {
     auto args = path;
     args.push_back("--help");
-    Child help(args, dir, "help");
+    test::AppProcess help(args, dir, "help");
     ASSERT_EQ(help.wait(), 0) << help.both();
     std::istringstream in(help.out());
     bool in_examples = false;
@@ -435,10 +378,10 @@ TEST(AppE2E, HelpExamplesNameFilesThatExist) {
 
 TEST(AppE2E, BadOptionsRefusedBeforeConnecting) {
   const fs::path dir = fresh_dir("badopt");
-  Child teach({"teach", "--robot", "http://nowhere", "--map", (dir / "m").string()}, dir, "t");
+  test::AppProcess teach({"teach", "--robot", "http://nowhere", "--map", (dir / "m").string()}, dir, "t");
   EXPECT_EQ(teach.wait(), 1);
   EXPECT_NE(teach.err().find("robot URL"), std::string::npos) << teach.both();
-  Child bad({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "m").string(), "--set",
+  test::AppProcess bad({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "m").string(), "--set",
              "robot.frame_timeout_s=0.005"},
             dir, "bad");
   EXPECT_NE(bad.wait(), 0);
@@ -493,32 +436,19 @@ bool wait_driving(qi::QiSession& watcher, const qi::ServiceHandle& motion,
   return false;
 }
 
-std::string served_url(const Child& mock) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (std::chrono::steady_clock::now() < end) {
-    const std::string out = mock.out();
-    const auto at = out.find(" on tcp://");
-    if (at != std::string::npos) {
-      const auto start = at + 4;
-      return out.substr(start, out.find_first_of(" \n", start) - start);
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return "";
-}
 
 TEST(AppE2E, FrozenOrKilledReplayEndsInAStoppedBaseOnMockNaoqi) {
   const fs::path dir = fresh_dir("deadman");
-  Child teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+  test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
                    "--max-distance", "2.0"},
                   kQvga),
               dir, "teach");
   ASSERT_EQ(teach.wait(), 0) << teach.both();
 
-  Child mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile, "--log",
+  test::AppProcess mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile, "--log",
               (dir / "calls.jsonl").string()},
              dir, "mock");
-  const std::string url = served_url(mock);
+  const std::string url = test::mock_robot_url(mock);
   ASSERT_FALSE(url.empty()) << mock.both();
   qi::QiSession watcher;
   watcher.connect(url);
@@ -526,7 +456,7 @@ TEST(AppE2E, FrozenOrKilledReplayEndsInAStoppedBaseOnMockNaoqi) {
 
   // A 1 s freeze is a 1 s frame gap for the app: keep its frame timeout above it so the replay
   // goes on driving after SIGCONT (the second half kills it while driving).
-  Child replay(cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
+  test::AppProcess replay(test::cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames",
                     "2000", "--set", "robot.frame_timeout_s=3"},
                    kQvga),
                dir, "replay");

@@ -19,14 +19,13 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
+#include "app/e2e/app_process.hpp"
 
 namespace pepper::app {
 namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kBinary = std::string(PEPPER_BINARY_DIR) + "/pepper_app/pepper_app";
 
 fs::path fresh_dir(const std::string& name) {
   auto p = fs::temp_directory_path() / ("pepper_doctor_e2e_" + name);
@@ -35,72 +34,8 @@ fs::path fresh_dir(const std::string& name) {
   return p;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
-/// A pepper_app subprocess with its stdout and stderr in files.
-class Proc {
- public:
-  Proc(std::vector<std::string> args, const fs::path& dir, const std::string& name)
-      : out_(dir / (name + ".stdout")), err_(dir / (name + ".stderr")) {
-    args.insert(args.begin(), kBinary);
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int rc = posix_spawn(&pid_, kBinary.c_str(), &fa, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0) throw std::runtime_error("cannot start " + kBinary);
-  }
-  ~Proc() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-  }
-  int wait(std::chrono::seconds limit = std::chrono::seconds(60)) {
-    const auto end = std::chrono::steady_clock::now() + limit;
-    while (std::chrono::steady_clock::now() < end) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return -1;
-  }
-  void signal(int sig) const { kill(pid_, sig); }
-  std::string out() const { return slurp(out_); }
-  std::string both() const { return "stdout:\n" + slurp(out_) + "\nstderr:\n" + slurp(err_); }
 
- private:
-  pid_t pid_ = -1;
-  fs::path out_, err_;
-};
-
-/// Starts `mock-robot` with extra options on a free port; returns its URL ("" on failure).
-std::string start_mock(Proc& mock) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (std::chrono::steady_clock::now() < end) {
-    const std::string out = mock.out();
-    const auto at = out.find(" on tcp://");
-    if (at != std::string::npos) {
-      const auto start = at + 4;
-      return out.substr(start, out.find_first_of(" \n", start) - start);
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return "";
-}
 
 /// The doctor line of a check ("" when absent).
 std::string line_of(const std::string& out, const std::string& check) {
@@ -130,15 +65,15 @@ DoctorRun run_doctor_against(const std::vector<std::string>& mock_options,
   const fs::path dir = fresh_dir(name);
   std::vector<std::string> args = {"mock-robot", "--listen", "tcp://127.0.0.1:0"};
   args.insert(args.end(), mock_options.begin(), mock_options.end());
-  Proc mock(args, dir, "mock");
-  const std::string url = start_mock(mock);
+  test::AppProcess mock(args, dir, "mock");
+  const std::string url = test::mock_robot_url(mock);
   DoctorRun r;
   if (url.empty()) {
     r.all = mock.both();
     return r;
   }
-  Proc doctor({"doctor", "--robot", url, "--camera-seconds", "0.5"}, dir, "doctor");
-  r.code = doctor.wait();
+  test::AppProcess doctor({"doctor", "--robot", url, "--camera-seconds", "0.5"}, dir, "doctor");
+  r.code = doctor.wait(std::chrono::seconds(60));
   r.out = doctor.out();
   r.all = doctor.both() + "\nmock:\n" + mock.both();
   mock.signal(SIGINT);
@@ -222,16 +157,12 @@ const std::string kWorldFile = std::string(PEPPER_SOURCE_DIR) + "/worlds/robotic
 const std::vector<std::string> kQvga = {"--set", "robot.camera_width_px=320", "--set",
                                         "robot.camera_height_px=240"};
 
-std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
 
 }  // namespace
 
 TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
   const fs::path dir = fresh_dir("supervision");
-  Proc teach(cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
+  test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
                   "--max-distance", "2.0"},
                  kQvga),
              dir, "teach");
@@ -239,13 +170,13 @@ TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
 
   // 1. The robot stops executing moves 4 s after start-up (an obstacle): warned, not stopped.
   {
-    Proc mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile, "--fail-moves",
+    test::AppProcess mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile, "--fail-moves",
                "Safety: obstacle (e2e)", "--fail-moves-after-s", "4"},
               dir, "mock_fail");
-    const std::string url = start_mock(mock);
+    const std::string url = test::mock_robot_url(mock);
     ASSERT_FALSE(url.empty()) << mock.both();
-    Proc replay(
-        cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "150"},
+    test::AppProcess replay(
+        test::cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "150"},
             kQvga),
         dir, "replay_fail");
     replay.wait(std::chrono::seconds(90));
@@ -259,13 +190,13 @@ TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
   // 2. Autonomous Life takes the head 4 s after start-up and cannot be turned off: the replay
   // ends with head_lock_lost (exit code 1) and says what to do.
   {
-    Proc mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile,
+    test::AppProcess mock({"mock-robot", "--listen", "tcp://127.0.0.1:0", "--world", kWorldFile,
                "--take-head-after-s", "4", "--take-head-sticky"},
               dir, "mock_head");
-    const std::string url = start_mock(mock);
+    const std::string url = test::mock_robot_url(mock);
     ASSERT_FALSE(url.empty()) << mock.both();
-    Proc replay(
-        cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "600"},
+    test::AppProcess replay(
+        test::cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "600"},
             kQvga),
         dir, "replay_head");
     EXPECT_EQ(replay.wait(std::chrono::seconds(90)), 1) << replay.both();
