@@ -63,6 +63,18 @@ const char* to_string(StopReason r) {
   return "unknown";
 }
 
+const char* to_string(Telemetry::ArrivalSource s) {
+  switch (s) {
+    case Telemetry::ArrivalSource::kNone:
+      return "none";
+    case Telemetry::ArrivalSource::kVision:
+      return "vision";
+    case Telemetry::ArrivalSource::kOdometry:
+      return "odometry";
+  }
+  return "unknown";
+}
+
 std::vector<std::string> NavigatorOptions::validate() const {
   std::vector<std::string> errors;
   auto append = [&](std::vector<std::string> more, const char* prefix) {

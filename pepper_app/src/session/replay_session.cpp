@@ -105,7 +105,7 @@ Arrival judge_arrival(const nav::Telemetry& t, double tolerance_m, double tolera
       !std::isfinite(t.arrival_lateral_m) || !std::isfinite(t.arrival_heading_rad)) {
     return a;
   }
-  a.source = t.arrival_source == nav::Telemetry::ArrivalSource::kVision ? "vision" : "odometry";
+  a.source = nav::to_string(t.arrival_source);
   a.along_m = t.arrival_along_m;
   a.lateral_m = t.arrival_lateral_m;
   a.heading_rad = t.arrival_heading_rad;

@@ -68,11 +68,7 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"arrival_along_m", num(t.arrival_along_m)},
       {"arrival_lateral_m", num(t.arrival_lateral_m)},
       {"arrival_heading_rad", num(t.arrival_heading_rad)},
-      {"arrival_source", t.arrival_source == core::navigator::Telemetry::ArrivalSource::kVision
-                             ? "vision"
-                             : t.arrival_source == core::navigator::Telemetry::ArrivalSource::kOdometry
-                                   ? "odometry"
-                                   : "none"},
+      {"arrival_source", to_string(t.arrival_source)},
       {"localization_ran", t.localization_ran},
       {"localization_best", t.localization_best},
       {"localization_best_count", t.localization_best_count},

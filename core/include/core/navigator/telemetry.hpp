@@ -120,4 +120,7 @@ struct Telemetry {
   features::FeatureOverlay overlay;
 };
 
+/// "none", "vision", "odometry".
+const char* to_string(Telemetry::ArrivalSource s);
+
 }  // namespace pepper::core::navigator
