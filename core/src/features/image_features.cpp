@@ -128,16 +128,19 @@ std::vector<std::string> KltOptions::validate() const {
   check_range(e, "klt.prior_window_px", prior_window_px, 5, 101);
   if (prior_window_px % 2 == 0)
     e.push_back("klt.prior_window_px = " + std::to_string(prior_window_px) + " must be odd");
-  if (normalise_window_px != 0 && (normalise_window_px < 3 || normalise_window_px > 101 ||
-                                   normalise_window_px % 2 == 0)) {
-    e.push_back("klt.normalise_window_px = " + std::to_string(normalise_window_px) +
-                " must be 0 (off) or odd in [3, 101]");
-  }
+  check_range(e, "klt.normalise_window_frac", normalise_window_frac, 0.0, 0.3);
   return e;
 }
 
+int KltOptions::normalise_window_px(int width_px) const {
+  if (normalise_window_frac <= 0.0) return 0;
+  const int half = static_cast<int>(std::lround(normalise_window_frac * width_px / 2.0));
+  return 2 * std::max(half, 1) + 1;
+}
+
 cv::Mat klt_image(const cv::Mat& gray, const KltOptions& options) {
-  if (options.normalise_window_px == 0) return gray;
+  const int window_px = options.normalise_window_px(gray.cols);
+  if (window_px == 0) return gray;
   // Standard deviations below this (grey levels) are taken as this: a uniform wall with sensor
   // noise (sigma ~2-3) is not amplified into texture. 6 is below the contrast of the weakest
   // corners FAST keeps (threshold 20 on a 16-pixel ring) even at x0.6.
@@ -146,7 +149,7 @@ cv::Mat klt_image(const cv::Mat& gray, const KltOptions& options) {
   constexpr float kScale = 32.0f;
   cv::Mat f, mean, mean_sq;
   gray.convertTo(f, CV_32F);
-  const cv::Size win(options.normalise_window_px, options.normalise_window_px);
+  const cv::Size win(window_px, window_px);
   cv::boxFilter(f, mean, CV_32F, win, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
   cv::boxFilter(f.mul(f), mean_sq, CV_32F, win, cv::Point(-1, -1), true, cv::BORDER_REFLECT);
   cv::Mat out(gray.size(), CV_8UC1);

@@ -149,6 +149,30 @@ struct Tracks {
   std::vector<float> error;  ///< KLT mean patch error (grey levels) of the tracks that are ok
 };
 
+// Standard deviation of the grey levels in the (2 r + 1)^2 patch around p, clipped to the image.
+double patch_sigma(const cv::Mat& gray, const cv::Point2f& p, int r) {
+  const int x = static_cast<int>(std::lround(p.x)), y = static_cast<int>(std::lround(p.y));
+  const cv::Rect roi = cv::Rect(x - r, y - r, 2 * r + 1, 2 * r + 1) & cv::Rect(0, 0, gray.cols, gray.rows);
+  if (roi.area() < 4) return 0.0;
+  cv::Scalar mean, sigma;
+  cv::meanStdDev(gray(roi), mean, sigma);
+  return sigma[0];
+}
+
+// A track's two patches under the light model of the normalised images (a grey level gain that
+// varies slowly across the view): the target patch's contrast is the source's times a gain.
+// Normalisation makes the patch error blind to that gain, so a corner tracked onto a flat wall
+// (a contrast of sensor noise only, normalised to the same flat grey as any plain patch) would
+// pass it; its gain, target over source contrast, is far below any light change the replay
+// meets (x0.6 and sensor noise: > 0.5). Raw grey levels: their patch error already rejects it.
+bool plausible_gain(const cv::Mat& a_gray, const cv::Point2f& a_px, const cv::Mat& b_gray,
+                    const cv::Point2f& b_px) {
+  constexpr int kRadiusPx = 3;
+  constexpr double kMinGain = 0.3, kMaxGain = 1.0 / kMinGain;
+  const double sa = patch_sigma(a_gray, a_px, kRadiusPx), sb = patch_sigma(b_gray, b_px, kRadiusPx);
+  return sb >= kMinGain * sa && sb <= kMaxGain * sa;
+}
+
 // One pyramidal LK call from a's image into b's with a window of window_px (<= k.window_px), using
 // their pyramids when they were built for k. With `use_initial`, b_pts holds the starting
 // positions (OPTFLOW_USE_INITIAL_FLOW). Rejects tracks with a large patch error or ending
@@ -158,7 +182,7 @@ void run_lk(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
             std::vector<cv::Point2f>& b_pts, std::vector<uchar>& status, std::vector<float>& err) {
   auto usable = [&](const ImageFeatures& f) {
     return !f.klt_pyramid.empty() && f.klt_pyramid_options.window_px == k.window_px &&
-           f.klt_pyramid_options.normalise_window_px == k.normalise_window_px &&
+           f.klt_pyramid_options.normalise_window_frac == k.normalise_window_frac &&
            f.klt_pyramid_options.max_level >= k.max_level;
   };
   const bool a_pyr = usable(a), b_pyr = usable(b);
@@ -177,10 +201,15 @@ void run_lk(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
                              win, max_level, crit, flags, k.min_eig_threshold);
   }
   const float w = static_cast<float>(b.image_size.width), h = static_cast<float>(b.image_size.height);
+  const bool check_contrast = !a.gray.empty() && !b.gray.empty();
   for (size_t i = 0; i < status.size(); ++i) {
     if (!status[i]) continue;
     const cv::Point2f& p = b_pts[i];
-    if (!(err[i] <= k.max_error) || !(p.x >= 0 && p.y >= 0 && p.x <= w - 1 && p.y <= h - 1)) status[i] = 0;
+    if (!(err[i] <= k.max_error) || !(p.x >= 0 && p.y >= 0 && p.x <= w - 1 && p.y <= h - 1)) {
+      status[i] = 0;
+    } else if (check_contrast && !plausible_gain(a.gray, a_pts[i], b.gray, p)) {
+      status[i] = 0;
+    }
   }
 }
 
@@ -653,8 +682,8 @@ FrameMatcher::FrameMatcher(ImageFeatures current, const MatcherOptions& options)
   check_image(current_, "FrameMatcher (current)");
   const bool ok = !current_.klt_pyramid.empty() &&
                   current_.klt_pyramid_options.window_px == options_.klt.window_px &&
-                  current_.klt_pyramid_options.normalise_window_px ==
-                      options_.klt.normalise_window_px &&
+                  current_.klt_pyramid_options.normalise_window_frac ==
+                      options_.klt.normalise_window_frac &&
                   current_.klt_pyramid_options.max_level >= options_.klt.max_level;
   if (!ok) build_klt_pyramid(current_, options_.klt, false);  // only tracked into: no derivatives
 }

@@ -300,9 +300,9 @@ std::vector<Parameter> build_table() {
     row("features.klt.prior_window_px",
         klt, &Klt::prior_window_px, "px", "[5, 101]",
         "window when tracking from a prior (odd, capped at window_px)"),
-    row("features.klt.normalise_window_px",
-        klt, &Klt::normalise_window_px, "px", "[0, 101]",
-        "window of the local normalisation KLT and line detection work on (odd; 0: raw grey)"),
+    row("features.klt.normalise_window_frac",
+        klt, &Klt::normalise_window_frac, "", "[0, 0.3]",
+        "side of the local normalisation window KLT and line detection work on, as a fraction of the image width (0: raw grey)"),
 
     // features.matcher: MatcherOptions (core/features/matching.hpp)
     row("features.matcher.three_view_point_radius_px",

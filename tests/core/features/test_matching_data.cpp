@@ -68,8 +68,8 @@ TEST_F(VispSequenceData, ConsecutiveFramesVerifyOverThreeViews) {
 }
 
 // The light halved between a key image and the current one. On locally normalised grey levels
-// (klt.normalise_window_px = 61) KLT keeps its points, so the ORB fallback has nothing to do. On
-// raw grey levels (the default) KLT's patch error rejects most tracks and ORB (intensity
+// (klt.normalise_window_frac, the default) KLT keeps its points, so the ORB fallback has nothing
+// to do. On raw grey levels (normalise_window_frac = 0) KLT's patch error rejects most tracks and ORB (intensity
 // comparisons within a patch) keeps matching: the fallback's mechanism is checked there. With
 // orb_fallback_below_points above KLT's count and at most ORB's, FrameMatcher::
 // two_view_for_control returns the ORB points (flagged: their idx_a are keypoints) and
@@ -77,10 +77,9 @@ TEST_F(VispSequenceData, ConsecutiveFramesVerifyOverThreeViews) {
 // Measured (frames 0 and 1 of mbt/cube, frame 1 x0.5): raw KLT 0 points, ORB 165; normalised
 // KLT 182 (of 190 in the same light).
 TEST_F(VispSequenceData, NormalisedKltKeepsPointsWhenTheLightHalves) {
-  FeatureExtractorOptions normalised_ex;
-  normalised_ex.klt.normalise_window_px = 61;
-  MatcherOptions normalised;
-  normalised.klt.normalise_window_px = 61;
+  const FeatureExtractorOptions normalised_ex;
+  const MatcherOptions normalised;
+  ASSERT_GT(normalised.klt.normalise_window_frac, 0.0);
   const FeatureExtractor ex(cube_camera(), normalised_ex);
   const ImageFeatures key = load(ex, cube_frame(0));
   cv::Mat dim;
@@ -89,9 +88,9 @@ TEST_F(VispSequenceData, NormalisedKltKeepsPointsWhenTheLightHalves) {
   const TwoViewMatches same = match_two_view(key, load(ex, cube_frame(1)), normalised);
   EXPECT_GE(dimmed.n_points(), 0.8 * same.n_points());
   MatcherOptions raw;
-  raw.klt.normalise_window_px = 0;
+  raw.klt.normalise_window_frac = 0;
   FeatureExtractorOptions raw_ex;
-  raw_ex.klt.normalise_window_px = 0;
+  raw_ex.klt.normalise_window_frac = 0;
   const FeatureExtractor ex_raw(cube_camera(), raw_ex);
   EXPECT_LT(match_two_view(load(ex_raw, cube_frame(0)), ex_raw.extract(dim), raw).n_points(),
             0.2 * same.n_points());
@@ -99,7 +98,7 @@ TEST_F(VispSequenceData, NormalisedKltKeepsPointsWhenTheLightHalves) {
 
 TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   FeatureExtractorOptions raw;
-  raw.klt.normalise_window_px = 0;  // raw grey levels: KLT loses the points (see above)
+  raw.klt.normalise_window_frac = 0;  // raw grey levels: KLT loses the points (see above)
   const FeatureExtractor ex(cube_camera(), raw);
   const ImageFeatures key = load(ex, cube_frame(0));
   cv::Mat dim;
@@ -108,7 +107,7 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   const ImageFeatures bright = load(ex, cube_frame(1));
 
   MatcherOptions o;
-  o.klt.normalise_window_px = 0;
+  o.klt.normalise_window_frac = 0;
   FrameMatcher klt_only(current, o);
   const TwoViewMatches& k = klt_only.two_view(0, key);
   o.orb_fallback_below_points = 100;

@@ -61,20 +61,25 @@ struct KltOptions {
   int prior_max_level = 1;
   int prior_probes = 16;
   int prior_window_px = 11;
-  /// KLT tracks on photometrically normalised images (klt_image): each pixel's grey level minus
-  /// the mean of the square window of this side around it, divided by that window's standard
-  /// deviation (floored, klt_image). A light change multiplies the grey levels (a global gain, or
+  /// KLT and the line detector work on photometrically normalised images (klt_image): each
+  /// pixel's grey level minus the mean of a square window around it, divided by that window's
+  /// standard deviation (floored). A light change multiplies the grey levels (a global gain, or
   /// one that varies slowly across the image); within a window it cancels out, so the patch
   /// error stays that of the unchanged images. Why: on raw grey levels a light change of x0.6
-  /// left 8 of 1073 verified points on Pepper's key images, x1.4 239 (test_illumination.cpp).
-  /// 0: raw grey levels. Odd, 0 or 3..101. Off by default until the closed loop shows it
-  /// helps: at QVGA (robotics_room, 3 starts) 61 px drove worse without a light change than raw
-  /// grey levels (docs/perception.md).
-  int normalise_window_px = 0;
+  /// left 8 of 1073 verified points on Pepper's key images, x1.4 239 (test_illumination.cpp),
+  /// and the generated worlds under light x0.7 completed 10 of 40 replays (docs/perception.md).
+  /// The window's side is this fraction of the image width (rounded to an odd number of pixels:
+  /// 0.095 gives 31 px at QVGA, 61 px at VGA), so that it covers the same part of the view at
+  /// both sizes. 0: raw grey levels. Measured in the closed loop (docs/perception.md): a window
+  /// of 61 px at QVGA (0.19) drove worse than raw grey levels without a light change; a window
+  /// of 31 px at VGA (0.048) loses the prior-seeded tracks (test_klt_prior.cpp).
+  double normalise_window_frac = 0.095;
+  /// The normalisation window's side in pixels for an image `width_px` wide (0: off).
+  int normalise_window_px(int width_px) const;
   std::vector<std::string> validate() const;
 };
 
-/// The image KLT tracks on (KltOptions::normalise_window_px): CV_8UC1, 128 + 32 x the locally
+/// The image KLT tracks on (KltOptions::normalise_window_frac): CV_8UC1, 128 + 32 x the locally
 /// standardised grey level, saturated; `gray` itself when normalisation is off.
 cv::Mat klt_image(const cv::Mat& gray, const KltOptions& options);
 
