@@ -17,6 +17,7 @@
 #include "evaluation/metrics.hpp"
 #include "report/html_report.hpp"
 #include "report/plot.hpp"
+#include "session/console.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
@@ -70,6 +71,7 @@ int run_demo(const DemoArgs& args) {
   DemoArgs a = args;
   if (a.world.empty()) a.world = default_world();
   using Clock = std::chrono::steady_clock;
+  Console& console = terminal_console();
   try {
     CommonSessionArgs common = a.common;
     if (!a.vga) {
@@ -83,15 +85,19 @@ int run_demo(const DemoArgs& args) {
     const std::filesystem::path map_dir = out / "map";
     const std::filesystem::path rec_dir = out / "teach.recording";
     std::filesystem::remove_all(rec_dir);
+    EventSink events(common.events);
     install_interrupt_handlers();
-    auto ui = start_session_ui(common, config);
-    SessionLink link(ui.get(), &std::cout);
+    auto ui = start_session_ui(common, config, events.stream(), console);
+    SessionLink link(ui.get(), events.stream());
+    link.set_console(&console);
     const std::string url = "mock:" + a.world;
 
     // 1. Teach.
     const auto t0 = Clock::now();
-    std::cerr << "demo 1/3: teaching " << a.max_distance_m << " m of the tour in " << a.world
-              << " (scripted drive on the simulated Pepper)...\n";
+    console.line("demo 1/3: teaching " +
+                 (a.max_distance_m > 0 ? fmt(a.max_distance_m, 1) + " m of the tour"
+                                       : std::string("the whole tour")) +
+                 " in " + a.world + " (scripted drive on the simulated Pepper)");
     RobotConnection teach_robot = open_robot(url, robot_connect_options(common, config));
     TeachSessionOptions to;
     to.map_dir = map_dir;
@@ -105,14 +111,14 @@ int run_demo(const DemoArgs& args) {
     to.frame_timeout_ms = config.robot.frame_timeout_ms();
     if (ui) to.pace_hz = 2.0 * config.robot.camera_fps;  // watchable, still quick
     const TeachResult taught = run_teach_session(teach_robot, to, link);
-    for (const auto& w : taught.warnings) std::cerr << "  warning: " << w << "\n";
+    for (const auto& w : taught.warnings) console.warning(w);
     if (!taught.ok()) {
       return report_error("teach " + taught.outcome + ": " + taught.error);
     }
     const double teach_s = std::chrono::duration<double>(Clock::now() - t0).count();
-    std::cerr << "  " << taught.frames_recorded << " frames, " << taught.key_images
-              << " key images, " << fmt(taught.distance_m, 2) << " m in " << fmt(teach_s, 1)
-              << " s\n";
+    console.line("  taught: " + std::to_string(taught.frames_recorded) + " frames, " +
+                 std::to_string(taught.key_images) + " key images, " +
+                 fmt(taught.distance_m, 2) + " m in " + fmt(teach_s, 1) + " s");
 
     // 2. Replay from a perturbed start.
     const auto t1 = Clock::now();
@@ -120,9 +126,8 @@ int run_demo(const DemoArgs& args) {
     const auto start = replay_robot.mock->world().scenario.replay_start(0, a.seed);
     replay_robot.mock->place(start);
     replay_robot.mock->set_lighting("replay");
-    std::cerr << "demo 2/3: replaying from a perturbed start (x " << fmt(start.x_m, 2) << " m, y "
-              << fmt(start.y_m, 2) << " m, yaw " << fmt(start.yaw_rad * 180 / M_PI, 1)
-              << " deg)...\n";
+    console.line("demo 2/3: replaying from a perturbed start (x " + fmt(start.x_m, 2) + " m, y " +
+                 fmt(start.y_m, 2) + " m, yaw " + fmt(start.yaw_rad * 180 / M_PI, 1) + " deg)");
     ReplaySessionOptions ro;
     ro.camera = to.camera;
     ro.head = to.head;
@@ -142,11 +147,13 @@ int run_demo(const DemoArgs& args) {
     const ReplayResult replayed =
         run_replay_session(replay_robot, core::memory::load_map(map_dir), ro, link);
     const double replay_s = std::chrono::duration<double>(Clock::now() - t1).count();
-    std::cerr << "  " << replayed.outcome << " after " << replayed.frames << " frames ("
-              << fmt(replay_s, 1) << " s)\n";
+    console.line("  replay " + replayed.outcome + " after " + std::to_string(replayed.frames) +
+                 " frames (" + fmt(replay_s, 1) + " s)" +
+                 (replayed.detail.empty() ? std::string() : ": " + replayed.detail) +
+                 (replayed.error.empty() ? std::string() : ": " + replayed.error));
 
     // 3. Report.
-    std::cerr << "demo 3/3: writing the report...\n";
+    console.line("demo 3/3: writing the report");
     namespace ev = evaluation;
     std::vector<double> travelled, lateral, tx, ty, rx, ry, ts, omega, nl, np;
     ev::Polyline path(taught.path_m);
@@ -232,16 +239,20 @@ int run_demo(const DemoArgs& args) {
                "Signed distance from the taught path (> 0 left)");
     const std::filesystem::path report_file = out / "report.html";
     html.write(report_file);
-    std::cout << nlohmann::json{{"event", "report"},
-                                {"path", report_file.string()},
-                                {"success", replayed.tour_complete},
-                                {"lateral_rms_m", dev.rms_m},
-                                {"lateral_max_m", dev.max_m},
-                                {"final_error_m", final_error_m},
-                                {"key_images", taught.key_images}}
-                     .dump()
-              << "\n";
-    std::cerr << "report: " << std::filesystem::absolute(report_file).string() << "\n";
+    link.event({{"event", "report"},
+                {"path", report_file.string()},
+                {"success", replayed.tour_complete},
+                {"lateral_rms_m", dev.rms_m},
+                {"lateral_max_m", dev.max_m},
+                {"final_error_m", final_error_m},
+                {"key_images", taught.key_images}});
+    console.line(std::string("result: ") +
+                 (replayed.tour_complete ? "tour complete" : "tour not completed (" +
+                                                                 replayed.outcome + ")") +
+                 ", lateral deviation RMS " + fmt(dev.rms_m * 100, 1) + " cm, max " +
+                 fmt(dev.max_m * 100, 1) + " cm, final error " + fmt(final_error_m * 100, 1) +
+                 " cm (ground truth)");
+    console.line("report: " + std::filesystem::absolute(report_file).string());
     return replayed.tour_complete ? 0 : 1;
   } catch (const std::exception& e) {
     return report_exception(e);
@@ -266,7 +277,14 @@ void register_demo_command(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--seed", args->seed, "Replay start perturbation seed (0 = unperturbed)");
   cmd->add_flag("--vga", args->vga, "Use 640x480 frames (slower) instead of 320x240");
-  cmd->footer("Example:\n  pepper_app demo --world worlds/robotics_room.yaml --out /tmp/demo --ui");
+  cmd->footer(
+      "Examples:\n"
+      "  pepper_app demo --world worlds/robotics_room.yaml --out /tmp/demo --ui\n"
+      "  pepper_app demo --out /tmp/demo --events /tmp/demo/events.jsonl\n"
+      "Console: the phases, a progress line per phase (key image k of K, distance, frame rate,\n"
+      "elapsed) that updates in place on a terminal (a line every 5 s in a log), warnings and\n"
+      "the result. The events (JSON lines: commands, teach_done, replay_done, report) go to\n"
+      "--events FILE, or to stdout with --events -.");
   cmd->callback([args] { exit_code() = run_demo(*args); });
 }
 
