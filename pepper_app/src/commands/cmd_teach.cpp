@@ -144,7 +144,8 @@ int run_teach(const TeachArgs& a) {
     for (const auto& w : r.warnings) console.line("pepper_app: warning: " + w);
     std::ostringstream result;
     result << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
-           << o.recording_dir.string() << ", " << r.distance_m << " m";
+           << o.recording_dir.string() << ", " << std::fixed << std::setprecision(2)
+           << r.distance_m << std::defaultfloat << " m";
     if (r.map_saved) {
       result << "; map with " << r.key_images << " key images";
       // NaN: a map without distances (no odometry and no commanded speeds recorded).
