@@ -58,6 +58,14 @@ struct MapBuildArgs {
   std::string steps_csv;
 };
 
+/// The teach's threshold for weak key images, so `map info`, `map show` and the
+/// teach UI agree.
+TourCheckOptions tour_check_options() {
+  TourCheckOptions o;
+  o.min_features = TeachSessionOptions{}.min_key_features;
+  return o;
+}
+
 int run_map_info(const MapInfoArgs& a) {
   try {
     // --full loads and checks every file (checksums); default reads the manifest only.
@@ -65,6 +73,9 @@ int run_map_info(const MapInfoArgs& a) {
         a.full ? core::memory::summarize(core::memory::load_map(a.dir))
                : core::memory::read_map_info(a.dir);
     std::cout << summary.to_text();
+    for (const auto& w : check_tour(summary, tour_check_options())) {
+      std::cout << "warning: " << w.text << "\n";
+    }
     if (a.full) std::cout << "all files present and checksums verified\n";
     return 0;
   } catch (const std::exception& e) {
@@ -85,13 +96,6 @@ int run_map_list(const MapListArgs& a) {
   } catch (const std::exception& e) {
     return report_exception(e);
   }
-}
-
-/// The teach's threshold for weak key images, so `map show` and the teach UI agree.
-TourCheckOptions tour_check_options() {
-  TourCheckOptions o;
-  o.min_features = TeachSessionOptions{}.min_key_features;
-  return o;
 }
 
 int run_map_show(const MapShowArgs& a) {
@@ -199,7 +203,10 @@ void register_map_command(CLI::App& app) {
   map->require_subcommand(1);
 
   auto info_args = std::make_shared<MapInfoArgs>();
-  auto* info = map->add_subcommand("info", "Summarise a map: key images, features, duration.");
+  auto* info = map->add_subcommand(
+      "info",
+      "Summarise a map: key images, features, duration, distance; warnings where the tour is weak\n"
+      "(as `map show`).");
   info->add_option("dir", info_args->dir, "Map folder")->required();
   info->add_flag("--full", info_args->full, "Load every file and verify checksums too");
   info->footer("Example:\n  pepper_app map info maps/lab_tour --full");

@@ -3,6 +3,7 @@
 // and trimmed; the trimmed map must load and pass `map info --full`, bad arguments must exit 2
 // with a message naming the allowed range, and the input map must stay as it was.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -25,7 +26,9 @@ const std::string kWorldFile = std::string(PEPPER_SOURCE_DIR) + "/worlds/robotic
 class MapCommands : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "pepper_e2e_map_commands";
+    // One folder per process: ctest runs each test of the suite as a process of its own, in
+    // parallel, and each teaches its map.
+    dir_ = fs::temp_directory_path() / ("pepper_e2e_map_commands_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "maps");
     test::AppProcess teach({"teach", "--robot", "mock:" + kWorldFile, "--map",
@@ -34,6 +37,10 @@ class MapCommands : public ::testing::Test {
                            dir_, "teach");
     teach_ok_ = teach.wait() == 0;
     teach_output_ = teach.both();
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
   }
   void SetUp() override {
     ASSERT_TRUE(teach_ok_) << teach_output_;
@@ -93,6 +100,36 @@ TEST_F(MapCommands, ShowWritesAPageWithEveryKeyImageAndItsCounts) {
   // The map was taught on the mock robot: its taught path is drawn.
   EXPECT_NE(html.find("Taught path in the mock world 'robotics_room'"), std::string::npos);
   EXPECT_NE(html.find("<h2>Warnings</h2>"), std::string::npos);
+}
+
+// A key image stripped of its features (a blank wall, as far as the replay is concerned) is
+// named by `map info` and `map show`, with what to do, and framed as weak on the page.
+TEST_F(MapCommands, InfoAndShowWarnAboutAKeyImageWithFewFeatures) {
+  core::memory::VisualMemory weak = map_;
+  auto& f = weak.key_images[2].features;
+  ASSERT_GT(f.lines.size(), 10u);
+  f.lines.resize(10);
+  f.line_descriptors = f.line_descriptors.rowRange(0, 10).clone();  // one row per line
+  f.corners_px.resize(std::min<std::size_t>(f.corners_px.size(), 10));
+  const fs::path weak_dir = dir_ / "weak";
+  core::memory::save_map(weak, weak_dir);
+  const std::string info = run({"map", "info", weak_dir.string()}, "info_weak", 0);
+  EXPECT_NE(info.find("warning: key image 2 has few features (10 lines, 10 points"),
+            std::string::npos)
+      << info;
+  EXPECT_EQ(info.find("warning: key image 1 "), std::string::npos) << info;
+  const fs::path page = dir_ / "weak.html";
+  const std::string show =
+      run({"map", "show", weak_dir.string(), "--out", page.string()}, "show_weak", 0);
+  EXPECT_NE(show.find("1 warning\n  warning: key image 2 has few features"), std::string::npos)
+      << show;
+  EXPECT_NE(show.find("add texture"), std::string::npos) << show;
+  const std::string html = test::AppProcess::slurp(page);
+  EXPECT_NE(html.find("<figure class=\"key weak\" id=\"key-2\">"), std::string::npos);
+  EXPECT_EQ(html.find("<figure class=\"key weak\" id=\"key-1\">"), std::string::npos);
+  // The taught map itself: no warning on this well-textured tour.
+  const std::string room_info = run({"map", "info", room().string()}, "info_room", 0);
+  EXPECT_EQ(room_info.find("warning:"), std::string::npos) << room_info;
 }
 
 TEST_F(MapCommands, TrimWritesAValidMapOfTheRangeAndLeavesTheInputAlone) {
