@@ -78,7 +78,7 @@ int run_demo(const DemoArgs& args) {
   if (a.world.empty()) a.world = default_world();
   if (a.quick) a.max_distance_m = kQuickDistance_m;
   using Clock = std::chrono::steady_clock;
-  Console& console = terminal_console();
+  Console& console = session_console(args.common);
   try {
     CommonSessionArgs common = a.common;
     if (!a.vga) {

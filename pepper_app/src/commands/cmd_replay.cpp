@@ -46,7 +46,7 @@ int replay_exit_code(const ReplayResult& r) {
 }
 
 int run_replay(const ReplayArgs& a) {
-  Console& console = terminal_console();
+  Console& console = session_console(a.common);
   try {
     const AppConfig config = load_session_config(a.common);
     core::memory::VisualMemory map = core::memory::load_map(a.map);

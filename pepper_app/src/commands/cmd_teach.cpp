@@ -81,7 +81,7 @@ int run_teach(const TeachArgs& a) {
     return 2;
   }
   fs::path previous;  // where the old map waits while the new one is taught
-  Console& console = terminal_console();
+  Console& console = session_console(a.common);
   try {
     const AppConfig config = load_session_config(a.common);
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));

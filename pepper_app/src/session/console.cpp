@@ -124,6 +124,16 @@ void Console::line(std::string_view text) {
   out_ << std::flush;
 }
 
+void Console::set_in_place(bool in_place) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (in_place == in_place_) return;
+  if (showing_) {  // end the line on screen before the other behaviour begins
+    out_ << "\n" << std::flush;
+    showing_ = false;
+  }
+  in_place_ = in_place;
+}
+
 void Console::warning(std::string_view text) { line("warning: " + std::string(text)); }
 
 Console& terminal_console() {

@@ -56,6 +56,9 @@ class Console {
   void warning(std::string_view text);
 
   bool in_place() const { return in_place_; }
+  /// Switches between the terminal and the log behaviour (e.g. to log lines when the events go
+  /// to the same terminal on stdout: an in-place line would be torn by them).
+  void set_in_place(bool in_place);
 
   /// The progress text for a sample (no line ends); `elapsed` since the phase began and the frame
   /// rate measured by the caller (NaN: not yet known). Public for the tests.

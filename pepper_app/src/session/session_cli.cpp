@@ -1,5 +1,7 @@
 #include "session/session_cli.hpp"
 
+#include <unistd.h>
+
 #include <iostream>
 
 #include <nlohmann/json.hpp>
@@ -42,6 +44,12 @@ EventSink::EventSink(const std::string& spec) {
     throw std::runtime_error(spec + ": cannot write: check that its folder exists and is writable");
   }
   out_ = &file_;
+}
+
+Console& session_console(const CommonSessionArgs& args) {
+  Console& console = terminal_console();
+  if (args.events == "-" && ::isatty(STDOUT_FILENO) == 1) console.set_in_place(false);
+  return console;
 }
 
 AppConfig load_session_config(const CommonSessionArgs& args) {

@@ -77,6 +77,11 @@ naoqi_bridge::CameraRequest camera_request_for_map(const CommonSessionArgs& args
                                                    const AppConfig& config,
                                                    const core::CameraIntrinsics& map_camera);
 
+/// The command line's console (terminal_console()) for a session with these options: with
+/// `--events -` on a terminal, the JSON lines share the screen, so the progress line is printed
+/// as log lines instead of being rewritten in place.
+Console& session_console(const CommonSessionArgs& args);
+
 /// Starts the UI when --ui or --ui-port was given (else returns null) and announces its URL: as
 /// the "listening" event on `events` (may be null) and as a line on `console` (the UI's own
 /// warnings go there too).

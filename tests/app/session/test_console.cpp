@@ -118,5 +118,22 @@ TEST(Console, ANewPhaseRestartsTheClockAndIsShownAtOnce) {
       << text;
 }
 
+// With `--events -` on a terminal the events share the screen: the console switches to log lines
+// and first ends the line it was rewriting, so no event is printed into it.
+TEST(Console, SwitchingToLogLinesEndsTheLineOnScreen) {
+  std::ostringstream out;
+  FakeClock clock;
+  Console console(out, /*in_place=*/true, std::chrono::seconds(5), std::ref(clock));
+  console.progress(replay_at(1, 0));
+  console.set_in_place(false);
+  EXPECT_EQ(out.str().back(), '\n');
+  out.str("");
+  clock.t += std::chrono::seconds(6);
+  console.progress(replay_at(90, 1));
+  const std::string text = out.str();
+  EXPECT_EQ(text.find('\r'), std::string::npos) << text;
+  EXPECT_EQ(lines_of(text), 1) << text;
+}
+
 }  // namespace
 }  // namespace pepper::app
