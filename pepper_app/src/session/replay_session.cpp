@@ -322,7 +322,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                       {"needed", options.navigator.initial.rule.min_best_count}});
         }
       }
-      {
+      if (link.console() != nullptr) {  // the evaluation has none: no strings per frame
         // The console's line: the map's distance at the key image passed (IP), as the UI's
         // progress bar, so a real robot shows the same measure.
         Progress p;

@@ -256,7 +256,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                               {"n_lines", step.n_lines_three_view},
                               {"n_points", step.n_points_two_view}});
       }
-      {
+      if (link.console() != nullptr) {
         Progress p;
         p.phase = "teach";
         p.frames = teacher->frames_seen();
