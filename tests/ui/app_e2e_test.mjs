@@ -2,8 +2,8 @@
 // on the in-process mock robot with the teach UI, driven by Debian's chromium through
 // playwright-core (tests/ui/lib.mjs). Checks: the page loads and connects, the live image
 // advances with the detected (teach) or matched (replay) lines and points drawn over it, holding
-// the Up arrow makes the mock robot move (the app logs every base command as a JSON line on
-// stdout: {"event":"command","v_m_s":...,"stop":false}) and releasing it stops it, the Finish
+// the Up arrow makes the mock robot move (with `--events -` the app writes every base command as a
+// JSON line on stdout: {"event":"command","v_m_s":...,"stop":false}) and releasing it stops it, the Finish
 // button ends the teach with a saved map, the replay's top view draws the taught path (from the
 // map's taught_path.json) and the replayed one, and STOP stops a running replay.
 // It also measures the frame rate of the live image in the browser over --fps-seconds (default
@@ -51,7 +51,7 @@ async function checkFrameRate(page, seconds, what) {
 
 async function teachStep() {
   const server = await startServer(opts.app, ['teach', '--robot', `mock:${opts.world}`,
-    '--map', join(work, 'ui_map'), '--manual', '--ui-port', '0', ...QVGA], { echo });
+    '--map', join(work, 'ui_map'), '--manual', '--ui-port', '0', '--events', '-', ...QVGA], { echo });
   const browser = await launchBrowser();
   const { page } = browser;
   try {
@@ -113,7 +113,7 @@ async function replayStep() {
   if (t.status !== 0) throw new Error(`scripted teach failed:\n${t.stderr}`);
   if (!existsSync(join(mapDir, 'taught_path.json'))) throw new Error('teach on the mock wrote no taught_path.json');
   const server = await startServer(opts.app, ['replay', '--robot', `mock:${opts.world}`,
-    '--map', mapDir, '--ui-port', '0', '--mock-start', '0', '--seed', '0', ...QVGA], { echo });
+    '--map', mapDir, '--ui-port', '0', '--events', '-', '--mock-start', '0', '--seed', '0', ...QVGA], { echo });
   const browser = await launchBrowser();
   const { page } = browser;
   try {

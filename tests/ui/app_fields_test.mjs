@@ -80,7 +80,7 @@ async function expectOfflineShown(page) {
 
 async function teachStep() {
   const server = await startServer(opts.app, ['teach', '--robot', `mock:${opts.world}`,
-    '--map', mapDir, '--manual', '--ui-port', '0', ...QVGA], { echo });
+    '--map', mapDir, '--manual', '--ui-port', '0', '--events', '-', ...QVGA], { echo });
   const browser = await launchBrowser();
   const { page } = browser;
   try {
@@ -173,7 +173,7 @@ async function replayStep() {
   }
   const info = mapInfo(mapDir);
   const server = await startServer(opts.app, ['replay', '--robot', `mock:${opts.world}`,
-    '--map', mapDir, '--ui-port', '0', '--mock-start', '0', '--seed', '0', ...QVGA], { echo });
+    '--map', mapDir, '--ui-port', '0', '--events', '-', '--mock-start', '0', '--seed', '0', ...QVGA], { echo });
   const browser = await launchBrowser();
   const { page } = browser;
   try {

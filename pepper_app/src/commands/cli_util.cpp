@@ -5,6 +5,7 @@
 
 #include "config/parameters.hpp"
 #include "core/camera/intrinsics_io.hpp"
+#include "session/console.hpp"
 
 namespace pepper::app {
 
@@ -30,7 +31,8 @@ std::optional<core::CameraIntrinsics> load_camera_option(const std::string& path
 }
 
 int report_error(const std::string& what) {
-  std::cerr << "pepper_app: error: " << what << "\n";
+  // Through the console: on a terminal it first clears a progress line of a running session.
+  terminal_console().line("pepper_app: error: " + what);
   return 1;
 }
 

@@ -1,6 +1,7 @@
-// `pepper_app demo [--world W] [--out DIR] [--ui]`: the newcomer's main job. On the mock robot:
-// teach a tour of a shipped world (scripted drive, no human), replay it from a perturbed start,
-// and write an HTML report (top view of taught and replayed paths, omega and feature-count
+// `pepper_app demo [--world W] [--out DIR] [--ui] [--quick]`: the newcomer's main job. On the mock
+// robot: teach a shipped world's whole tour (robotics_room: a loop around the central tables with
+// four 90-degree turns, back to the start; scripted drive, no human), replay it from a perturbed
+// start, and write an HTML report (top view of taught and replayed paths, omega and feature-count
 // plots, summary table). Everything happens through the same session loops as `teach` and
 // `replay` on a real robot; only the robot is simulated.
 #include <chrono>
@@ -17,6 +18,7 @@
 #include "evaluation/metrics.hpp"
 #include "report/html_report.hpp"
 #include "report/plot.hpp"
+#include "session/console.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
@@ -30,10 +32,15 @@ struct DemoArgs {
   CommonSessionArgs common;
   std::string world;  // empty: the default world (default_world())
   std::string out = "demo_out";
-  double max_distance_m = 4.5;  // the first straight of robotics_room (its corner follows)
+  double max_distance_m = 0.0;  // 0: the whole tour
+  bool quick = false;           // the first straight only (kQuickDistance_m), for the test suite
   uint64_t seed = 1;
   bool vga = false;
 };
+
+// --quick: the first straight of robotics_room, stopping before its corner (about 10 s of CPU
+// instead of about 40 s for the whole loop).
+constexpr double kQuickDistance_m = 4.5;
 
 std::string fmt(double v, int prec = 3) {
   std::ostringstream s;
@@ -69,7 +76,9 @@ std::string default_world() {
 int run_demo(const DemoArgs& args) {
   DemoArgs a = args;
   if (a.world.empty()) a.world = default_world();
+  if (a.quick) a.max_distance_m = kQuickDistance_m;
   using Clock = std::chrono::steady_clock;
+  Console& console = session_console(args.common);
   try {
     CommonSessionArgs common = a.common;
     if (!a.vga) {
@@ -83,15 +92,20 @@ int run_demo(const DemoArgs& args) {
     const std::filesystem::path map_dir = out / "map";
     const std::filesystem::path rec_dir = out / "teach.recording";
     std::filesystem::remove_all(rec_dir);
+    EventSink events(common.events);
     install_interrupt_handlers();
-    auto ui = start_session_ui(common, config);
-    SessionLink link(ui.get(), &std::cout);
+    auto ui = start_session_ui(common, config, events.stream(), console);
+    SessionLink link(ui.get(), events.stream());
+    link.set_console(&console);
     const std::string url = "mock:" + a.world;
 
     // 1. Teach.
     const auto t0 = Clock::now();
-    std::cerr << "demo 1/3: teaching " << a.max_distance_m << " m of the tour in " << a.world
-              << " (scripted drive on the simulated Pepper)...\n";
+    console.line("demo 1/3: teaching " +
+                 (a.max_distance_m > 0 ? fmt(a.max_distance_m, 1) + " m of the tour"
+                                       : std::string("the whole tour (its turns and the way "
+                                                     "back)")) +
+                 " in " + a.world + " (scripted drive on the simulated Pepper)");
     RobotConnection teach_robot = open_robot(url, robot_connect_options(common, config));
     TeachSessionOptions to;
     to.map_dir = map_dir;
@@ -105,14 +119,14 @@ int run_demo(const DemoArgs& args) {
     to.frame_timeout_ms = config.robot.frame_timeout_ms();
     if (ui) to.pace_hz = 2.0 * config.robot.camera_fps;  // watchable, still quick
     const TeachResult taught = run_teach_session(teach_robot, to, link);
-    for (const auto& w : taught.warnings) std::cerr << "  warning: " << w << "\n";
+    for (const auto& w : taught.warnings) console.warning(w);
     if (!taught.ok()) {
       return report_error("teach " + taught.outcome + ": " + taught.error);
     }
     const double teach_s = std::chrono::duration<double>(Clock::now() - t0).count();
-    std::cerr << "  " << taught.frames_recorded << " frames, " << taught.key_images
-              << " key images, " << fmt(taught.distance_m, 2) << " m in " << fmt(teach_s, 1)
-              << " s\n";
+    console.line("  taught: " + std::to_string(taught.frames_recorded) + " frames, " +
+                 std::to_string(taught.key_images) + " key images, " +
+                 fmt(taught.distance_m, 2) + " m in " + fmt(teach_s, 1) + " s");
 
     // 2. Replay from a perturbed start.
     const auto t1 = Clock::now();
@@ -120,9 +134,8 @@ int run_demo(const DemoArgs& args) {
     const auto start = replay_robot.mock->world().scenario.replay_start(0, a.seed);
     replay_robot.mock->place(start);
     replay_robot.mock->set_lighting("replay");
-    std::cerr << "demo 2/3: replaying from a perturbed start (x " << fmt(start.x_m, 2) << " m, y "
-              << fmt(start.y_m, 2) << " m, yaw " << fmt(start.yaw_rad * 180 / M_PI, 1)
-              << " deg)...\n";
+    console.line("demo 2/3: replaying from a perturbed start (x " + fmt(start.x_m, 2) + " m, y " +
+                 fmt(start.y_m, 2) + " m, yaw " + fmt(start.yaw_rad * 180 / M_PI, 1) + " deg)");
     ReplaySessionOptions ro;
     ro.camera = to.camera;
     ro.head = to.head;
@@ -142,11 +155,13 @@ int run_demo(const DemoArgs& args) {
     const ReplayResult replayed =
         run_replay_session(replay_robot, core::memory::load_map(map_dir), ro, link);
     const double replay_s = std::chrono::duration<double>(Clock::now() - t1).count();
-    std::cerr << "  " << replayed.outcome << " after " << replayed.frames << " frames ("
-              << fmt(replay_s, 1) << " s)\n";
+    console.line("  replay " + replayed.outcome + " after " + std::to_string(replayed.frames) +
+                 " frames (" + fmt(replay_s, 1) + " s)" +
+                 (replayed.detail.empty() ? std::string() : ": " + replayed.detail) +
+                 (replayed.error.empty() ? std::string() : ": " + replayed.error));
 
     // 3. Report.
-    std::cerr << "demo 3/3: writing the report...\n";
+    console.line("demo 3/3: writing the report");
     namespace ev = evaluation;
     std::vector<double> travelled, lateral, tx, ty, rx, ry, ts, omega, nl, np;
     ev::Polyline path(taught.path_m);
@@ -232,16 +247,20 @@ int run_demo(const DemoArgs& args) {
                "Signed distance from the taught path (> 0 left)");
     const std::filesystem::path report_file = out / "report.html";
     html.write(report_file);
-    std::cout << nlohmann::json{{"event", "report"},
-                                {"path", report_file.string()},
-                                {"success", replayed.tour_complete},
-                                {"lateral_rms_m", dev.rms_m},
-                                {"lateral_max_m", dev.max_m},
-                                {"final_error_m", final_error_m},
-                                {"key_images", taught.key_images}}
-                     .dump()
-              << "\n";
-    std::cerr << "report: " << std::filesystem::absolute(report_file).string() << "\n";
+    link.event({{"event", "report"},
+                {"path", report_file.string()},
+                {"success", replayed.tour_complete},
+                {"lateral_rms_m", dev.rms_m},
+                {"lateral_max_m", dev.max_m},
+                {"final_error_m", final_error_m},
+                {"key_images", taught.key_images}});
+    console.line(std::string("result: ") +
+                 (replayed.tour_complete ? "tour complete" : "tour not completed (" +
+                                                                 replayed.outcome + ")") +
+                 ", lateral deviation RMS " + fmt(dev.rms_m * 100, 1) + " cm, max " +
+                 fmt(dev.max_m * 100, 1) + " cm, final error " + fmt(final_error_m * 100, 1) +
+                 " cm (ground truth)");
+    console.line("report: " + std::filesystem::absolute(report_file).string());
     return replayed.tour_complete ? 0 : 1;
   } catch (const std::exception& e) {
     return report_exception(e);
@@ -254,19 +273,33 @@ void register_demo_command(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
   auto* cmd = app.add_subcommand(
       "demo",
-      "Teach a tour in a shipped world on the simulated Pepper (scripted drive), replay it from a\n"
-      "perturbed start, and write an HTML report (top view, omega and feature plots, summary).\n"
+      "Teach the whole tour of a shipped world on the simulated Pepper (scripted drive; the\n"
+      "default robotics_room: a loop of about 16 m with four 90-degree turns, back to the start),\n"
+      "replay it from a perturbed start, and write an HTML report (top view, omega and feature\n"
+      "plots, summary). About a minute at 320x240; --quick teaches the first straight only.\n"
       "With --ui the run can be watched live in a browser.");
   add_common_session_options(cmd, args->common, false);
   cmd->add_option("--world", args->world,
                   "World file (default: worlds/robotics_room.yaml of this checkout)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "Output folder (map, recording, telemetry, report.html)");
-  cmd->add_option("--distance", args->max_distance_m, "Metres of the tour to teach (0 = all)")
-      ->check(CLI::NonNegativeNumber);
+  auto* distance =
+      cmd->add_option("--distance", args->max_distance_m, "Metres of the tour to teach (0 = all)")
+          ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--quick", args->quick,
+                "Teach only the first 4.5 m (robotics_room: the first straight, no turn): about "
+                "a quarter of the time, for tests")
+      ->excludes(distance);
   cmd->add_option("--seed", args->seed, "Replay start perturbation seed (0 = unperturbed)");
   cmd->add_flag("--vga", args->vga, "Use 640x480 frames (slower) instead of 320x240");
-  cmd->footer("Example:\n  pepper_app demo --world worlds/robotics_room.yaml --out /tmp/demo --ui");
+  cmd->footer(
+      "Examples:\n"
+      "  pepper_app demo --world worlds/robotics_room.yaml --out /tmp/demo --ui\n"
+      "  pepper_app demo --quick --out /tmp/demo --events /tmp/demo_events.jsonl\n"
+      "Console: the phases, a progress line per phase (key image k of K, distance, frame rate,\n"
+      "elapsed) that updates in place on a terminal (a line every 5 s in a log), warnings and\n"
+      "the result. The events (JSON lines: commands, teach_done, replay_done, report) go to\n"
+      "--events FILE, or to stdout with --events -.");
   cmd->callback([args] { exit_code() = run_demo(*args); });
 }
 

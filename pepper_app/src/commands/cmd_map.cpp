@@ -1,4 +1,7 @@
-// `pepper_app map info DIR` and `pepper_app map build --recording DIR --map DIR`.
+// `pepper_app map info DIR`, `map build --recording DIR --map DIR`, and the map management of
+// issue 25: `map list DIR`, `map show MAP --out FILE.html`, `map trim MAP --from K --to L --out
+// NEWMAP` (offline/map_tools.hpp, report/map_page.hpp).
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -6,7 +9,11 @@
 #include "commands/commands.hpp"
 #include "config/app_config.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "offline/map_tools.hpp"
 #include "offline/offline_jobs.hpp"
+#include "report/map_page.hpp"
+#include "session/taught_path.hpp"
+#include "session/teach_session.hpp"
 
 namespace pepper::app {
 namespace {
@@ -15,6 +22,31 @@ struct MapInfoArgs {
   std::string dir;
   bool full = false;
 };
+
+struct MapListArgs {
+  std::string dir;
+};
+
+struct MapShowArgs {
+  std::string map;
+  std::string out;
+};
+
+struct MapTrimArgs {
+  std::string map;
+  int from = 0;
+  int to = -1;  ///< -1: the final key image
+  std::string out;
+  bool overwrite = false;
+};
+
+namespace fs = std::filesystem;
+
+/// Usage errors of the map commands: exit code 2, nothing written.
+int usage_error(const std::string& command, const std::string& what) {
+  std::cerr << "pepper_app map " << command << ": " << what << "\n";
+  return 2;
+}
 
 struct MapBuildArgs {
   std::string recording;
@@ -26,6 +58,14 @@ struct MapBuildArgs {
   std::string steps_csv;
 };
 
+/// The teach's threshold for weak key images, so `map info`, `map show` and the
+/// teach UI agree.
+TourCheckOptions tour_check_options() {
+  TourCheckOptions o;
+  o.min_features = TeachSessionOptions{}.min_key_features;
+  return o;
+}
+
 int run_map_info(const MapInfoArgs& a) {
   try {
     // --full loads and checks every file (checksums); default reads the manifest only.
@@ -33,7 +73,95 @@ int run_map_info(const MapInfoArgs& a) {
         a.full ? core::memory::summarize(core::memory::load_map(a.dir))
                : core::memory::read_map_info(a.dir);
     std::cout << summary.to_text();
+    for (const auto& w : check_tour(summary, tour_check_options())) {
+      std::cout << "warning: " << w.text << "\n";
+    }
     if (a.full) std::cout << "all files present and checksums verified\n";
+    return 0;
+  } catch (const std::exception& e) {
+    return report_exception(e);
+  }
+}
+
+int run_map_list(const MapListArgs& a) {
+  try {
+    const std::vector<MapListing> maps = find_maps(a.dir);
+    for (const auto& m : maps) std::cout << to_text(m) << "\n";
+    if (maps.empty()) {
+      std::cerr << "map list: no maps under " << a.dir
+                << " (a map is a folder with a manifest.json, written by `pepper_app teach` or "
+                   "`pepper_app map build`)\n";
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    return report_exception(e);
+  }
+}
+
+int run_map_show(const MapShowArgs& a) {
+  try {
+    const core::memory::VisualMemory map = core::memory::load_map(a.map);
+    const auto warnings = check_tour(core::memory::summarize(map), tour_check_options());
+    std::optional<TaughtPath> taught;
+    try {
+      taught = load_taught_path(a.map);
+    } catch (const std::exception& e) {  // the page without a path is still worth having
+      std::cerr << "pepper_app: warning: " << e.what() << "\n";
+    }
+    const std::string name = fs::absolute(a.map).lexically_normal().filename().string();
+    report::map_page(name.empty() ? a.map : name, map, warnings, taught).write(a.out);
+    std::cout << a.map << ": " << map.key_images.size() << " key images, " << warnings.size()
+              << " warning" << (warnings.size() == 1 ? "" : "s") << "\n";
+    for (const auto& w : warnings) std::cout << "  warning: " << w.text << "\n";
+    std::cout << "page written to " << a.out << "\n";
+    return 0;
+  } catch (const std::exception& e) {
+    return report_exception(e);
+  }
+}
+
+int run_map_trim(const MapTrimArgs& a) {
+  try {
+    // Refuse bad arguments before loading anything (the manifest gives the range).
+    const core::memory::MapSummary info = core::memory::read_map_info(a.map);
+    const int to = a.to < 0 ? info.final_index : a.to;
+    try {
+      check_trim_range(a.from, to, info.final_index);
+    } catch (const std::invalid_argument& e) {
+      return usage_error("trim", a.map + ": " + e.what());
+    }
+    std::error_code ec;
+    const bool same = fs::equivalent(a.map, a.out, ec);
+    if (same && !a.overwrite) {
+      return usage_error("trim", "--out " + a.out +
+                                     " is the input map: give another --out, or add "
+                                     "--overwrite to replace the input map");
+    }
+    const bool out_taken = fs::exists(a.out) && !(fs::is_directory(a.out) && fs::is_empty(a.out));
+    if (out_taken && !a.overwrite) {
+      return usage_error("trim", "--out " + a.out +
+                                     " already exists: give another --out, or add --overwrite "
+                                     "to replace it");
+    }
+    // --overwrite replaces a map, never a folder of something else (save_map removes it all).
+    if (out_taken && !fs::exists(fs::path(a.out) / "manifest.json")) {
+      return usage_error("trim", "--out " + a.out +
+                                     " holds files that are not a map: give another --out "
+                                     "(--overwrite replaces maps only)");
+    }
+    const core::memory::VisualMemory map = core::memory::load_map(a.map);
+    std::optional<TaughtPath> taught;
+    try {
+      taught = load_taught_path(a.map);
+    } catch (const std::exception& e) {  // the map is what matters; its top-view path is extra
+      std::cerr << "pepper_app: warning: " << e.what() << ": the trimmed map has no taught path\n";
+    }
+    const core::memory::VisualMemory trimmed = trim_map(map, a.from, to);
+    core::memory::save_map(trimmed, a.out);  // atomic: a failure leaves the old folder
+    if (taught) save_taught_path(a.out, trim_taught_path(*taught, map, a.from, to));
+    std::cout << core::memory::summarize(trimmed).to_text();
+    std::cout << "key images " << a.from << ".." << to << " of " << a.map << " written to "
+              << a.out << "\n";
     return 0;
   } catch (const std::exception& e) {
     return report_exception(e);
@@ -70,15 +198,59 @@ int run_map_build(const MapBuildArgs& a) {
 }  // namespace
 
 void register_map_command(CLI::App& app) {
-  auto* map = app.add_subcommand("map", "Inspect and build maps (visual memories of a tour).");
+  auto* map = app.add_subcommand(
+      "map", "Inspect, list, show, trim and build maps (visual memories of a tour).");
   map->require_subcommand(1);
 
   auto info_args = std::make_shared<MapInfoArgs>();
-  auto* info = map->add_subcommand("info", "Summarise a map: key images, features, duration.");
+  auto* info = map->add_subcommand(
+      "info",
+      "Summarise a map: key images, features, duration, distance; warnings where the tour is weak\n"
+      "(as `map show`).");
   info->add_option("dir", info_args->dir, "Map folder")->required();
   info->add_flag("--full", info_args->full, "Load every file and verify checksums too");
   info->footer("Example:\n  pepper_app map info maps/lab_tour --full");
   info->callback([info_args] { exit_code() = run_map_info(*info_args); });
+
+  auto list_args = std::make_shared<MapListArgs>();
+  auto* list = map->add_subcommand(
+      "list", "List the maps under a folder: one line per map with its key images, taught "
+              "length, date saved and size on disk.");
+  list->add_option("dir", list_args->dir, "Folder to search (and its subfolders)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  list->footer("Example:\n  pepper_app map list maps");
+  list->callback([list_args] { exit_code() = run_map_list(*list_args); });
+
+  auto show_args = std::make_shared<MapShowArgs>();
+  auto* show = map->add_subcommand(
+      "show",
+      "Write an HTML page about a map: its key images as thumbnails with their line and point\n"
+      "counts, the taught path when known, and warnings where the tour is weak (key images with\n"
+      "few features, long gaps between key images). The warnings are printed too.");
+  show->add_option("map", show_args->map, "Map folder")->required();
+  show->add_option("--out", show_args->out, "HTML file to write")->required();
+  show->footer("Example:\n  pepper_app map show maps/lab --out lab.html");
+  show->callback([show_args] { exit_code() = run_map_show(*show_args); });
+
+  auto trim_args = std::make_shared<MapTrimArgs>();
+  auto* trim = map->add_subcommand(
+      "trim",
+      "Keep key images K..L of a map (tour indices, as `map info` numbers them) as a new map:\n"
+      "cut a bad start or end off a teach without teaching again. The input map is never\n"
+      "changed unless --out names it and --overwrite is given.");
+  trim->add_option("map", trim_args->map, "Map folder to read")->required();
+  trim->add_option("--from", trim_args->from, "First key image kept (default 0)");
+  trim->add_option("--to", trim_args->to, "Last key image kept (default: the final one)");
+  trim->add_option("--out", trim_args->out, "Map folder to write (saved atomically)")->required();
+  trim->add_flag("--overwrite", trim_args->overwrite,
+                 "Replace an existing map in --out (even the input map; a folder that is not a "
+                 "map is never replaced)");
+  trim->footer(
+      "Examples:\n"
+      "  pepper_app map trim maps/lab --to 12 --out maps/lab_short      # drop the key images after 12\n"
+      "  pepper_app map trim maps/lab --from 2 --out maps/lab_from2     # drop the first two");
+  trim->callback([trim_args] { exit_code() = run_map_trim(*trim_args); });
 
   auto build_args = std::make_shared<MapBuildArgs>();
   auto* build = map->add_subcommand(

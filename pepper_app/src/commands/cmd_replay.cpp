@@ -3,11 +3,13 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "evaluation/closed_loop.hpp"
+#include "session/console.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
@@ -44,6 +46,7 @@ int replay_exit_code(const ReplayResult& r) {
 }
 
 int run_replay(const ReplayArgs& a) {
+  Console& console = session_console(a.common);
   try {
     const AppConfig config = load_session_config(a.common);
     core::memory::VisualMemory map = core::memory::load_map(a.map);
@@ -74,8 +77,8 @@ int run_replay(const ReplayArgs& a) {
     o.camera = camera_request_for_map(a.common, config, map.camera);
     if (o.camera.width_px != config.robot.camera_width_px ||
         o.camera.height_px != config.robot.camera_height_px) {
-      std::cerr << "replay: camera " << o.camera.width_px << "x" << o.camera.height_px
-                << ", the size the map was taught at\n";
+      console.line("replay: camera " + std::to_string(o.camera.width_px) + "x" +
+                   std::to_string(o.camera.height_px) + ", the size the map was taught at");
     }
     o.head = head_request(config);
     o.navigator = config.navigator_options();
@@ -98,25 +101,27 @@ int run_replay(const ReplayArgs& a) {
           o.taught_path_m = taught->path_m;
           o.taught_keys_m = taught->key_images_m;
         } else if (taught) {
-          std::cerr << "pepper_app replay: note: the map was taught in mock world '"
-                    << taught->world << "', not this one: no taught path in the top view\n";
+          console.line("pepper_app replay: note: the map was taught in mock world '" +
+                       taught->world + "', not this one: no taught path in the top view");
         }
       } catch (const std::exception& e) {  // display only: never a reason not to replay
-        std::cerr << "pepper_app replay: warning: " << e.what() << "\n";
+        console.line(std::string("pepper_app replay: warning: ") + e.what());
       }
     }
     {
       const auto problems = o.validate();
       if (!problems.empty()) {
-        for (const auto& p : problems) std::cerr << "pepper_app replay: " << p << "\n";
+        for (const auto& p : problems) console.line("pepper_app replay: " + p);
         return 2;
       }
     }
+    EventSink events(a.common.events);
     install_interrupt_handlers();
-    auto ui = start_session_ui(a.common, config);
-    SessionLink link(ui.get(), &std::cout);
-    std::cerr << "replay: " << map.key_images.size() << " key images from " << a.map << " on "
-              << robot.bridge->describe() << "; Ctrl-C (or STOP in the UI) stops the robot\n";
+    auto ui = start_session_ui(a.common, config, events.stream(), console);
+    SessionLink link(ui.get(), events.stream());
+    link.set_console(&console);
+    console.line("replay: " + std::to_string(map.key_images.size()) + " key images from " + a.map +
+                 " on " + robot.bridge->describe() + "; Ctrl-C (or STOP in the UI) stops the robot");
     const ReplayResult r = run_replay_session(robot, std::move(map), o, link);
     if (!a.mock_command_log.empty() && robot.mock) {
       std::ofstream out(a.mock_command_log);
@@ -130,20 +135,21 @@ int run_replay(const ReplayArgs& a) {
       }
     }
     // One result line: the outcome, why, and how far the replay came.
-    std::cerr << "replay " << r.outcome << ": ";
+    std::ostringstream result;
+    result << "replay " << r.outcome << ": ";
     if (!r.error.empty()) {
       const std::string step = next_step_for(r.error_exception);
-      std::cerr << r.error << (step.empty() ? "" : ": " + step) << "; ";
+      result << r.error << (step.empty() ? "" : ": " + step) << "; ";
     } else if (!r.detail.empty()) {
-      std::cerr << r.detail << "; ";
+      result << r.detail << "; ";
     }
-    std::cerr << r.frames << " frames, ";
+    result << r.frames << " frames, ";
     if (r.max_key_reached < 0) {
-      std::cerr << "never localised in the map's " << r.key_image_count << " key images\n";
+      result << "never localised in the map's " << r.key_image_count << " key images";
     } else {
-      std::cerr << "furthest key image " << r.max_key_reached << " of " << r.key_image_count - 1
-                << "\n";
+      result << "furthest key image " << r.max_key_reached << " of " << r.key_image_count - 1;
     }
+    console.line(result.str());
     return replay_exit_code(r);
   } catch (const std::exception& e) {  // a ConfigError is 2: refused before anything moved
     return report_exception(e, 4);
@@ -164,7 +170,9 @@ void register_replay_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--record", args->record, "Also record the replay's frames in this folder");
-  cmd->add_option("--json", args->json_out, "Write per-frame command + telemetry as JSON lines");
+  cmd->add_option("--json", args->json_out,
+                  "Write per-frame command + telemetry as JSON lines (every frame; the "
+                  "session's events, one per change, are --events)");
   cmd->add_option("--max-frames", args->max_frames, "Stop after this many frames")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--mock-start", args->mock_start,
@@ -184,7 +192,12 @@ void register_replay_command(CLI::App& app) {
   cmd->footer(
       "Examples:\n"
       "  pepper_app replay --robot tcp://10.0.0.5 --map maps/lab --ui --json lab_run1.jsonl\n"
-      "  pepper_app replay --robot mock:worlds/robotics_room.yaml --map /tmp/room --mock-start 0");
+      "  pepper_app replay --robot mock:worlds/robotics_room.yaml --map /tmp/room --mock-start 0\n"
+      "  pepper_app replay --robot mock:worlds/robotics_room.yaml --map /tmp/room --events run.jsonl\n"
+      "Console: a progress line (key image k of K, distance, frame rate, elapsed) that updates in\n"
+      "place on a terminal (a line every 5 s in a log), warnings and the result line. The events\n"
+      "(JSON lines: commands, localisation, warnings, replay_done) go to --events FILE, or to\n"
+      "stdout with --events -.");
   cmd->callback([args] { exit_code() = run_replay(*args); });
 }
 

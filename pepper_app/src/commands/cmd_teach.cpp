@@ -6,10 +6,12 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "commands/cli_util.hpp"
 #include "commands/commands.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "session/console.hpp"
 #include "session/session_cli.hpp"
 #include "session/signals.hpp"
 #include "session/teach_session.hpp"
@@ -79,6 +81,7 @@ int run_teach(const TeachArgs& a) {
     return 2;
   }
   fs::path previous;  // where the old map waits while the new one is taught
+  Console& console = session_console(a.common);
   try {
     const AppConfig config = load_session_config(a.common);
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
@@ -105,7 +108,7 @@ int run_teach(const TeachArgs& a) {
     {
       const auto problems = o.validate();
       if (!problems.empty()) {
-        for (const auto& p : problems) std::cerr << "pepper_app teach: " << p << "\n";
+        for (const auto& p : problems) console.line("pepper_app teach: " + p);
         return 2;
       }
     }
@@ -114,18 +117,19 @@ int run_teach(const TeachArgs& a) {
       previous += ".previous";
       fs::remove_all(previous);
       fs::rename(map_dir, previous);
-      std::cerr << "teach: the old map waits in " << previous.string()
-                << " until the new one is saved\n";
+      console.line("teach: the old map waits in " + previous.string() +
+                   " until the new one is saved");
     }
+    EventSink events(a.common.events);
     install_interrupt_handlers();
-    auto ui = start_session_ui(a.common, config);
-    SessionLink link(ui.get(), &std::cout);
-    std::cerr << "teach: robot " << robot.bridge->describe() << ", recording to "
-              << o.recording_dir.string() << ", "
-              << (o.scripted ? "scripted drive along the world's path"
+    auto ui = start_session_ui(a.common, config, events.stream(), console);
+    SessionLink link(ui.get(), events.stream());
+    link.set_console(&console);
+    console.line("teach: robot " + robot.bridge->describe() + ", recording to " +
+                 o.recording_dir.string() + ", " +
+                 (o.scripted ? "scripted drive along the world's path"
                              : "drive from the teach UI (arrow keys); finish with the UI's Finish "
-                               "button or Ctrl-C")
-              << "\n";
+                               "button or Ctrl-C"));
     const TeachResult r = run_teach_session(robot, o, link);
     write_command_log(robot, a.mock_command_log);
     if (!previous.empty()) {
@@ -133,24 +137,25 @@ int run_teach(const TeachArgs& a) {
         fs::remove_all(previous);
       } else if (!fs::exists(map_dir)) {
         fs::rename(previous, map_dir);
-        std::cerr << "teach: no new map was saved: the old map is back in " << map_dir.string()
-                  << "\n";
+        console.line("teach: no new map was saved: the old map is back in " + map_dir.string());
       }
       previous.clear();
     }
-    for (const auto& w : r.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
-    std::cerr << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
-              << o.recording_dir.string() << ", " << r.distance_m << " m";
+    for (const auto& w : r.warnings) console.line("pepper_app: warning: " + w);
+    std::ostringstream result;
+    result << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
+           << o.recording_dir.string() << ", " << std::fixed << std::setprecision(2)
+           << r.distance_m << std::defaultfloat << " m";
     if (r.map_saved) {
-      std::cerr << "; map with " << r.key_images << " key images";
+      result << "; map with " << r.key_images << " key images";
       // NaN: a map without distances (no odometry and no commanded speeds recorded).
       if (std::isfinite(r.map_length_m)) {
-        std::cerr << " and " << std::fixed << std::setprecision(2) << r.map_length_m
-                  << std::defaultfloat << " m";
+        result << " and " << std::fixed << std::setprecision(2) << r.map_length_m
+               << std::defaultfloat << " m";
       }
-      std::cerr << " saved to " << a.map;
+      result << " saved to " << a.map;
     }
-    std::cerr << "\n";
+    console.line(result.str());
     if (!r.error.empty()) {
       const std::string step = next_step_for(r.error_exception);
       return report_error(r.error + (step.empty() ? "" : ": " + step));
@@ -200,7 +205,11 @@ void register_teach_command(CLI::App& app) {
       "Examples:\n"
       "  pepper_app teach --robot tcp://10.0.0.5 --map maps/lab --ui\n"
       "  pepper_app teach --robot mock:worlds/robotics_room.yaml --map /tmp/room "
-      "--set robot.camera_width_px=320 --set robot.camera_height_px=240");
+      "--set robot.camera_width_px=320 --set robot.camera_height_px=240 --events teach.jsonl\n"
+      "Console: a progress line (key images so far, distance, frame rate, elapsed) that updates\n"
+      "in place on a terminal (a line every 5 s in a log), warnings and the result line. The\n"
+      "events (JSON lines: commands, map_saved, teach_done) go to --events FILE, or to stdout\n"
+      "with --events -.");
   cmd->callback([args] { exit_code() = run_teach(*args); });
 }
 

@@ -5,6 +5,7 @@
 #include "config/app_config.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
+#include "session/console.hpp"
 #include "session/recording.hpp"
 #include "sim/world.hpp"
 
@@ -57,7 +58,8 @@ std::string message_with_next_step(const std::exception& e) {
 }
 
 int report_exception(const std::exception& e, int code) {
-  std::cerr << "pepper_app: error: " << message_with_next_step(e) << "\n";
+  // Through the console: on a terminal it first clears a progress line of a running session.
+  terminal_console().line("pepper_app: error: " + message_with_next_step(e));
   return dynamic_cast<const ConfigError*>(&e) != nullptr ? 2 : code;
 }
 

@@ -25,6 +25,8 @@ class HtmlReport {
   void preformatted(const std::string& text);     ///< escaped, monospace
   void table(const Table& table);
   void image(const cv::Mat& bgr_or_gray, const std::string& caption);
+  /// Markup added as it is (the caller escapes its text with html_escape).
+  void raw_html(const std::string& html) { body_ += html; }
 
   std::string html() const;
   /// Writes the page; throws std::runtime_error naming the path on failure.

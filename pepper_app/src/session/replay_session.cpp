@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "session/console.hpp"
 #include "session/recording.hpp"
 #include "session/robot_supervision.hpp"
 #include "session/signals.hpp"
@@ -286,6 +287,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (writer) writer->append(*frame, 0.0, 0.0);
       if (!started) {
         link.publish_frame(*frame, nlohmann::json::object());
+        Progress waiting;
+        waiting.phase = "replay";
+        waiting.frames = result.frames;
+        waiting.key_count = result.key_image_count;
+        waiting.detail = "waiting for the UI's start button";
+        link.progress(waiting);
         continue;
       }
       const auto step_t0 = Clock::now();
@@ -314,6 +321,41 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                       {"verified_matches", best_candidate_count},
                       {"needed", options.navigator.initial.rule.min_best_count}});
         }
+      }
+      if (link.console() != nullptr) {  // the evaluation has none: no strings per frame
+        // The console's line: the map's distance at the key image passed (IP), as the UI's
+        // progress bar, so a real robot shows the same measure.
+        Progress p;
+        p.phase = "replay";
+        p.frames = result.frames;
+        p.key_index = t.in;
+        p.key_count = result.key_image_count;
+        if (t.ip >= 0 && !key_distance_m.empty()) {
+          p.distance_m =
+              key_distance_m[std::clamp(t.ip, 0, static_cast<int>(key_distance_m.size()) - 1)];
+        } else if (!key_distance_m.empty()) {
+          p.distance_m = 0.0;
+        }
+        p.total_m = total_m;
+        if (!has_segment(t)) {
+          const std::string what =
+              t.state == nav::NavState::kLost ? "lost, relocalising" : "localising";
+          p.detail = best_candidate >= 0
+                         ? what + ": best key image " + std::to_string(best_candidate) + ", " +
+                               std::to_string(best_candidate_count) + " of " +
+                               std::to_string(options.navigator.initial.rule.min_best_count) +
+                               " verified matches"
+                         : what;
+        } else if (t.state == nav::NavState::kDeadReckoning) {
+          p.detail = "driving on odometry (vision blind)";
+        } else if (t.state == nav::NavState::kTourComplete ||
+                   (c.stop && c.reason == nav::StopReason::kTourComplete)) {
+          p.distance_m = total_m;  // IP is the one before the final image: show the whole tour
+          p.detail = "end of tour";
+        } else if (c.stop) {
+          p.detail = std::string("stopped: ") + nav::to_string(c.reason);
+        }
+        link.progress(p);
       }
       const bool stopped_short = c.stop && c.reason != nav::StopReason::kTourComplete;
       const bool gave_up = options.give_up_lost_s > 0 && last_moving_t_ns >= 0 && stopped_short &&
@@ -472,6 +514,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     link.publish_state({{"stop_reason", std::string("error: ") + e.what()}});
   }
   bridge.release();
+  link.end_progress();
   nlohmann::json arrival = nullptr;
   if (result.tour_complete) {
     arrival = {{"verdict", result.arrival.verdict},

@@ -7,6 +7,7 @@ SupervisionStep supervise_robot(naoqi_bridge::RobotBridge& bridge, SessionLink& 
   const naoqi_bridge::RobotSupervision s = bridge.supervise();
   for (const auto& w : s.warnings) {
     link.event({{"event", "robot_warning"}, {"message", w}});
+    link.warning("robot: " + w);
     link.publish_state({{"robot_warning", w}});
     step.warnings.push_back(w);
   }

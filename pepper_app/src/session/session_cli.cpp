@@ -1,10 +1,13 @@
 #include "session/session_cli.hpp"
 
+#include <unistd.h>
+
 #include <iostream>
 
 #include <nlohmann/json.hpp>
 
 #include "commands/cli_util.hpp"
+#include "session/console.hpp"
 #include "teach_ui/ui_server.hpp"
 
 namespace pepper::app {
@@ -21,9 +24,32 @@ void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool wit
     add_trust_options(cmd, args.tls_pin, args.trust_new_robot);
   }
   add_config_options(cmd, args.config_file, args.preset, args.sets, "robot.camera_fps=10");
+  cmd->add_option("--events", args.events,
+                  "Write the machine-readable events (JSON lines: commands, key images, "
+                  "warnings, the result) to this file; - writes them to stdout, as before the "
+                  "console showed a progress line");
   cmd->add_flag("--ui", args.ui, "Serve the teach UI on 127.0.0.1 (port: ui.port)");
   cmd->add_option("--ui-port", args.ui_port, "Serve the teach UI on this port (0 = any free port)")
       ->check(CLI::Range(0, 65535));
+}
+
+EventSink::EventSink(const std::string& spec) {
+  if (spec.empty()) return;
+  if (spec == "-") {
+    out_ = &std::cout;
+    return;
+  }
+  file_.open(spec, std::ios::out | std::ios::trunc);
+  if (!file_) {
+    throw std::runtime_error(spec + ": cannot write: check that its folder exists and is writable");
+  }
+  out_ = &file_;
+}
+
+Console& session_console(const CommonSessionArgs& args) {
+  Console& console = terminal_console();
+  if (args.events == "-" && ::isatty(STDOUT_FILENO) == 1) console.set_in_place(false);
+  return console;
 }
 
 AppConfig load_session_config(const CommonSessionArgs& args) {
@@ -99,21 +125,24 @@ naoqi_bridge::HeadLockRequest head_request(const AppConfig& config) {
 }
 
 std::unique_ptr<teach_ui::UiServer> start_session_ui(const CommonSessionArgs& args,
-                                                     const AppConfig& config) {
+                                                     const AppConfig& config,
+                                                     std::ostream* events, Console& console) {
   if (!args.ui && args.ui_port < 0) return nullptr;
   teach_ui::UiOptions o;
   o.port = static_cast<std::uint16_t>(args.ui_port >= 0 ? args.ui_port : config.ui.port);
   o.limits.max_v_m_s = config.ui.max_v_m_s;
   o.limits.max_omega_rad_s = config.ui.max_omega_rad_s;
-  o.log = [](teach_ui::UiLogLevel level, std::string_view text) {
-    if (level >= teach_ui::UiLogLevel::kWarning) std::cerr << "teach UI: " << text << "\n";
+  o.log = [&console](teach_ui::UiLogLevel level, std::string_view text) {
+    if (level >= teach_ui::UiLogLevel::kWarning) console.line("teach UI: " + std::string(text));
   };
   auto ui = std::make_unique<teach_ui::UiServer>(o);
   ui->start();
-  std::cout << nlohmann::json{{"event", "listening"}, {"url", ui->url()}, {"port", ui->port()}}.dump()
+  if (events != nullptr) {
+    *events << nlohmann::json{{"event", "listening"}, {"url", ui->url()}, {"port", ui->port()}}.dump()
             << "\n"
             << std::flush;
-  std::cerr << "teach UI: open " << ui->url() << " in a browser on this machine\n";
+  }
+  console.line("teach UI: open " + ui->url() + " in a browser on this machine");
   return ui;
 }
 

@@ -2,10 +2,13 @@
 // Command-line wiring shared by `teach`, `replay` and `demo`: the common options (--robot,
 // --config, --preset, --set, --ui, --ui-port, --user, --password-file), the effective
 // configuration, the robot connection options, the camera / head-lock requests from RobotConfig,
-// and the teach UI server (started on 127.0.0.1; its URL is printed as a JSON line on stdout,
-// {"event":"listening","url":"http://127.0.0.1:PORT/"}, plus a human line on stderr).
+// the teach UI server (started on 127.0.0.1; its URL is written as the event
+// {"event":"listening","url":"http://127.0.0.1:PORT/"}, plus a human line on the console), and
+// the machine-readable event sink (--events FILE, or - for stdout).
 
+#include <fstream>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -33,9 +36,29 @@ struct CommonSessionArgs {
   std::string password_file;
   std::string tls_pin;           ///< tcps: required certificate fingerprint (replaces the file)
   bool trust_new_robot = false;  ///< tcps: trust and remember a robot seen for the first time
+  std::string events;  ///< --events: JSON-lines event file, "-" for stdout, "" for none
 };
 
-/// Adds --config, --preset, --set, --ui, --ui-port (and --robot, --user, --password-file,
+class Console;
+
+/// Where the session's JSON-lines events go (`--events`): nowhere (""), stdout ("-", what the
+/// commands printed before the console existed, for scripts that read a pipe) or a file
+/// (truncated). Throws std::runtime_error "FILE: cannot write: ..." when the file cannot be
+/// created.
+class EventSink {
+ public:
+  explicit EventSink(const std::string& spec);
+  EventSink(const EventSink&) = delete;
+  EventSink& operator=(const EventSink&) = delete;
+  /// Null when there is no sink.
+  std::ostream* stream() { return out_; }
+
+ private:
+  std::ofstream file_;
+  std::ostream* out_ = nullptr;
+};
+
+/// Adds --config, --preset, --set, --ui, --ui-port, --events (and --robot, --user, --password-file,
 /// --tls-pin, --trust-new-robot when `with_robot`).
 void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool with_robot);
 
@@ -54,8 +77,16 @@ naoqi_bridge::CameraRequest camera_request_for_map(const CommonSessionArgs& args
                                                    const AppConfig& config,
                                                    const core::CameraIntrinsics& map_camera);
 
-/// Starts the UI when --ui or --ui-port was given (else returns null) and announces its URL.
+/// The command line's console (terminal_console()) for a session with these options: with
+/// `--events -` on a terminal, the JSON lines share the screen, so the progress line is printed
+/// as log lines instead of being rewritten in place.
+Console& session_console(const CommonSessionArgs& args);
+
+/// Starts the UI when --ui or --ui-port was given (else returns null) and announces its URL: as
+/// the "listening" event on `events` (may be null) and as a line on `console` (the UI's own
+/// warnings go there too).
 std::unique_ptr<teach_ui::UiServer> start_session_ui(const CommonSessionArgs& args,
-                                                     const AppConfig& config);
+                                                     const AppConfig& config,
+                                                     std::ostream* events, Console& console);
 
 }  // namespace pepper::app

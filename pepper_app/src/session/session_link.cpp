@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "session/console.hpp"
 #include "teach_ui/ui_server.hpp"
 
 namespace pepper::app {
@@ -63,6 +64,18 @@ void SessionLink::publish_thumbnail(const std::string& name, const cv::Mat& gray
 void SessionLink::event(const nlohmann::json& e) {
   if (events_ == nullptr) return;
   *events_ << e.dump() << "\n" << std::flush;
+}
+
+void SessionLink::progress(const Progress& p) {
+  if (console_ != nullptr) console_->progress(p);
+}
+
+void SessionLink::end_progress() {
+  if (console_ != nullptr) console_->end_progress();
+}
+
+void SessionLink::warning(const std::string& text) {
+  if (console_ != nullptr) console_->warning(text);
 }
 
 void SessionLink::command_event(double v_m_s, double omega_rad_s, bool stop,

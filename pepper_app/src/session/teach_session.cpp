@@ -9,6 +9,7 @@
 
 #include "core/mapping/drive_odometer.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "session/console.hpp"
 #include "session/recording.hpp"
 #include "session/signals.hpp"
 #include "session/taught_path.hpp"
@@ -255,6 +256,15 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                               {"n_lines", step.n_lines_three_view},
                               {"n_points", step.n_points_two_view}});
       }
+      if (link.console() != nullptr) {
+        Progress p;
+        p.phase = "teach";
+        p.frames = teacher->frames_seen();
+        p.key_index = teacher->key_image_count() - 1;
+        p.distance_m = result.distance_m;
+        if (!recording) p.detail = "not recording";
+        link.progress(p);
+      }
       nlohmann::json overlay = nlohmann::json::object();
       if (recording && link.has_ui()) {  // the teacher has just extracted this frame's features
         overlay = overlay_to_json(
@@ -314,6 +324,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     result.error_exception = std::current_exception();
   }
 
+  link.end_progress();
   result.distance_from_odometry_m = odometer.from_odometry_m();
   if (frames_with_odometry == 0 && frames_without_odometry > 0) {
     result.warnings.push_back("the robot gave no odometry" +

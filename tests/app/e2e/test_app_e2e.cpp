@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -47,9 +48,9 @@ fs::path fresh_dir(const std::string& name) {
 
 
 
-/// Last JSON event line of the given kind on stdout.
-nlohmann::json last_event(const std::string& out, const std::string& kind) {
-  std::istringstream in(out);
+/// Last JSON event line of the given kind in an `--events` file.
+nlohmann::json last_event(const fs::path& events, const std::string& kind) {
+  std::istringstream in(test::AppProcess::slurp(events));
   std::string line;
   nlohmann::json found;
   while (std::getline(in, line)) {
@@ -71,11 +72,11 @@ std::vector<nlohmann::json> read_jsonl(const fs::path& p) {
 TEST(AppE2E, TeachThenReplayOnMockRobot) {
   const fs::path dir = fresh_dir("mock");
   test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
-                   "--max-distance", "2.0"},
+                   "--max-distance", "2.0", "--events", (dir / "teach_events.jsonl").string()},
                   kQvga),
               dir, "teach");
   ASSERT_EQ(teach.wait(), 0) << teach.both();
-  const auto done = last_event(teach.out(), "teach_done");
+  const auto done = last_event(dir / "teach_events.jsonl", "teach_done");
   ASSERT_TRUE(done.is_object()) << teach.both();
   EXPECT_EQ(done["outcome"], "finished");
   const auto map = core::memory::load_map(dir / "map");
@@ -85,11 +86,12 @@ TEST(AppE2E, TeachThenReplayOnMockRobot) {
 
   test::AppProcess replay(test::cat({"replay", "--robot", "mock:" + kWorldFile, "--map", (dir / "map").string(),
                     "--mock-start", "0", "--seed", "0", "--json", (dir / "replay.jsonl").string(),
-                    "--max-frames", "900", "--mock-command-log", (dir / "commands.jsonl").string()},
+                    "--max-frames", "900", "--mock-command-log", (dir / "commands.jsonl").string(),
+                    "--events", (dir / "replay_events.jsonl").string()},
                    kQvga),
                dir, "replay");
   const int rc = replay.wait();
-  const auto r = last_event(replay.out(), "replay_done");
+  const auto r = last_event(dir / "replay_events.jsonl", "replay_done");
   ASSERT_TRUE(r.is_object()) << replay.both();
   // From the taught start the tour must be completed (exit code 0) and end stopped.
   EXPECT_EQ(rc, 0) << replay.both();
@@ -104,14 +106,19 @@ TEST(AppE2E, TeachThenReplayOnMockRobot) {
 
 // The README's main job: the demo teaches, replays from a perturbed start and must recognise
 // arrival at the final image (it used to drive 1 m past it, facing a wall with few points).
+// --quick: the first straight of the tour (the default whole loop takes about four times longer;
+// measured in the commit that made it the default).
 TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
   const fs::path dir = fresh_dir("demo");
-  test::AppProcess demo({"demo", "--out", (dir / "out").string()}, dir, "demo");
+  const fs::path events = dir / "events.jsonl";
+  test::AppProcess demo(
+      {"demo", "--quick", "--out", (dir / "out").string(), "--events", events.string()}, dir,
+      "demo");
   ASSERT_EQ(demo.wait(std::chrono::seconds(240)), 0) << demo.both();
-  const auto replay = last_event(demo.out(), "replay_done");
+  const auto replay = last_event(events, "replay_done");
   ASSERT_TRUE(replay.is_object()) << demo.both();
   EXPECT_EQ(replay["outcome"], "tour_complete");
-  const auto report = last_event(demo.out(), "report");
+  const auto report = last_event(events, "report");
   ASSERT_TRUE(report.is_object()) << demo.both();
   EXPECT_TRUE(report["success"].get<bool>());
   EXPECT_LT(report["final_error_m"].get<double>(), 0.3);
@@ -122,6 +129,56 @@ TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
     EXPECT_NE(html.find("arrival (the replay's own estimate)"), std::string::npos);
     EXPECT_NE(html.find("driven on odometry alone (vision blind)"), std::string::npos);
   }
+  // The console reads like a tool (issue 25): phases, a few progress lines, the result; no
+  // line per frame. stdout carries nothing without `--events -`.
+  const std::string console = demo.out() + demo.err();
+  const auto console_lines = std::count(console.begin(), console.end(), '\n');
+  EXPECT_LE(console_lines, 30) << console;
+  EXPECT_EQ(demo.out(), "") << console;
+  EXPECT_EQ(console.find("{\"event\""), std::string::npos) << console;
+  EXPECT_NE(console.find("key image"), std::string::npos) << console;  // a progress line
+  EXPECT_NE(console.find("result: tour complete"), std::string::npos) << console;
+  EXPECT_NE(console.find("report: "), std::string::npos) << console;
+  // Nothing lost: every line of the events file is a JSON event, and the commands are there
+  // (one per change of the command, from teach and replay).
+  std::ifstream in(events);
+  int lines = 0, commands = 0, moving = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++lines;
+    const auto e = nlohmann::json::parse(line, nullptr, false);
+    ASSERT_TRUE(e.is_object() && e.contains("event")) << "line " << lines << ": " << line;
+    if (e["event"] == "command") {
+      ++commands;
+      moving += !e["stop"].get<bool>();
+    }
+  }
+  EXPECT_GT(commands, 50);  // a replay changes its command on nearly every frame
+  EXPECT_GT(moving, 0);
+  EXPECT_EQ(last_event(events, "teach_done").value("outcome", ""), "finished");
+}
+
+// `--events -` writes the events to stdout, as the commands did before the console (issue 25):
+// every stdout line is JSON, and the human lines stay on stderr.
+TEST(AppE2E, EventsDashWritesJsonLinesToStdout) {
+  const fs::path dir = fresh_dir("events_stdout");
+  test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map",
+                                    (dir / "map").string(), "--max-distance", "0.5", "--events",
+                                    "-"},
+                                   kQvga),
+                         dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+  std::istringstream out(teach.out());
+  int lines = 0;
+  bool done = false;
+  for (std::string line; std::getline(out, line);) {
+    ++lines;
+    const auto e = nlohmann::json::parse(line, nullptr, false);
+    ASSERT_TRUE(e.is_object()) << line;
+    done = done || e.value("event", "") == "teach_done";
+  }
+  EXPECT_TRUE(done) << teach.both();
+  EXPECT_GT(lines, 2);
+  EXPECT_NE(teach.err().find("teach finished:"), std::string::npos) << teach.both();
 }
 
 // `evaluate` scores the replay loop that users run: the same world, start and seed through
@@ -145,11 +202,12 @@ TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
   // Run 2 is start index 1.
   test::AppProcess replay(test::cat({"replay", "--robot", "mock:" + world, "--map",
                     (dir / "maps" / "small_room_320x240").string(), "--mock-start", "1", "--seed",
-                    "3", "--mock-lighting", "teach", "--json", (dir / "replay.jsonl").string()},
+                    "3", "--mock-lighting", "teach", "--json", (dir / "replay.jsonl").string(),
+                    "--events", (dir / "events.jsonl").string()},
                    kQvga),
                dir, "replay");
   const int replay_rc = replay.wait(std::chrono::seconds(300));
-  const auto done = last_event(replay.out(), "replay_done");
+  const auto done = last_event(dir / "events.jsonl", "replay_done");
   ASSERT_TRUE(done.is_object()) << replay.both();
 
   std::vector<nlohmann::json> eval_commands, replay_commands;
@@ -216,11 +274,12 @@ TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
   EXPECT_EQ(map.camera.width_px, 320);
   // Replay over the wire; the robot has not moved, so it sits at the end of this tour.
   test::AppProcess replay(test::cat({"replay", "--robot", server.url(), "--map", (dir / "map").string(),
-                    "--max-frames", "150", "--json", (dir / "replay.jsonl").string()},
+                    "--max-frames", "150", "--json", (dir / "replay.jsonl").string(),
+                    "--events", (dir / "events.jsonl").string()},
                    kQvga),
                dir, "replay");
   const int rc = replay.wait();
-  const auto r = last_event(replay.out(), "replay_done");
+  const auto r = last_event(dir / "events.jsonl", "replay_done");
   ASSERT_TRUE(r.is_object()) << replay.both();
   EXPECT_GT(r["frames"].get<int64_t>(), 0) << replay.both();
   EXPECT_TRUE(r["outcome"] == "tour_complete" || r["outcome"] == "max_frames") << replay.both();

@@ -176,14 +176,19 @@ TEST(DoctorE2E, MockRobotSimulationOptionsReachTheReplaysSupervision) {
     const std::string url = test::mock_robot_url(mock);
     ASSERT_FALSE(url.empty()) << mock.both();
     test::AppProcess replay(
-        test::cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "150"},
+        test::cat({"replay", "--robot", url, "--map", (dir / "map").string(), "--max-frames", "150",
+                   "--events", (dir / "replay_fail_events.jsonl").string()},
             kQvga),
         dir, "replay_fail");
     replay.wait(std::chrono::seconds(90));
-    const std::string out = replay.out();
-    EXPECT_TRUE(has(out, "\"event\":\"robot_warning\"")) << replay.both();
-    EXPECT_TRUE(has(out, "move failed")) << replay.both();
-    EXPECT_TRUE(has(out, "Safety: obstacle (e2e)")) << replay.both();
+    // The event for programs, and the warning for the person on the console.
+    const std::string events = test::AppProcess::slurp(dir / "replay_fail_events.jsonl");
+    EXPECT_TRUE(has(events, "\"event\":\"robot_warning\"")) << events;
+    EXPECT_TRUE(has(events, "move failed")) << events;
+    EXPECT_TRUE(has(events, "Safety: obstacle (e2e)")) << events;
+    const std::string console = replay.err();
+    EXPECT_TRUE(has(console, "warning: robot: ")) << replay.both();
+    EXPECT_TRUE(has(console, "Safety: obstacle (e2e)")) << replay.both();
     mock.signal(SIGINT);
     mock.wait(std::chrono::seconds(10));
   }
