@@ -651,12 +651,13 @@ features::FrameMatcher Navigator::perceive(const Frame& frame, bool for_localisa
                                            Telemetry& tel) {
   const auto t0 = Clock::now();
   unsigned parts = features::kPartsCurrentFrame;
-  // ORB keypoints: for the initial localisation, and every frame with the ORB fallback.
-  if (for_localisation ||
-      (options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points)) {
-    parts |= features::kPartWideBaseline;
-  }
-  features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher);
+  // ORB keypoints: for the initial localisation now; with the ORB fallback, when a match first
+  // needs them (most frames verify enough KLT points and never do).
+  if (for_localisation) parts |= features::kPartWideBaseline;
+  const bool orb_fallback =
+      options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points;
+  features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher,
+                            orb_fallback ? &extractor_ : nullptr);
   for (auto& [i, points] : klt_priors_) fm.set_klt_prior(i, std::move(points));
   klt_priors_.clear();
   tel.timings.extract_ms = ms_since(t0);
