@@ -89,8 +89,11 @@ cv::Mat compute_band_descriptors(const cv::Mat& gray,
     const float o = static_cast<float>(r) - half;
     wg[r] = std::exp(-0.5f * o * o / (sigma_g * sigma_g));
   }
-  std::vector<std::array<float, 4>> row_sums(rows);
-  std::vector<cv::Point2f> centres;  // sample points along the segment
+  // Per row (offset across the segment): its four sums, and the sample's gradient at that row.
+  std::vector<float> pos_p(rows), neg_p(rows), pos_l(rows), neg_l(rows), off(rows);
+  std::vector<float> gx(rows), gy(rows);
+  std::vector<int> at(rows);
+  for (int r = 0; r < rows; ++r) off[r] = static_cast<float>(r) - half;
 
   for (size_t i = 0; i < segments.size(); ++i) {
     const cv::Point2f p0 = segments[i].first;
@@ -100,38 +103,46 @@ cv::Mat compute_band_descriptors(const cv::Mat& gray,
     const cv::Point2f d = dvec * (1.0f / len);
     const cv::Point2f n(d.y, -d.x);
     const int samples = std::clamp(static_cast<int>(len), 2, samples_along);
-    // Row by row with the row's four sums in registers, samples in order along the segment;
-    // adding or subtracting 0 leaves a sum unchanged, so these are the floating-point operations
-    // of a sample-by-sample loop with branches, in the same order: the same descriptor bits
-    // (checked on rendered frames), ~25 % less time with gradient_image.
-    centres.resize(static_cast<size_t>(samples));
-    for (int k = 0; k < samples; ++k) centres[k] = p0 + dvec * ((k + 0.5f) / samples);
-    for (int r = 0; r < rows; ++r) {
-      const float o = static_cast<float>(r) - half;
-      float pos_p = 0.f, neg_p = 0.f, pos_l = 0.f, neg_l = 0.f;
-      for (const cv::Point2f& c : centres) {
-        // Nearest pixel as GradientSampler::at.
-        const int xi = std::clamp(static_cast<int>(c.x + o * n.x + 0.5f), 0, w - 1);
-        const int yi = std::clamp(static_cast<int>(c.y + o * n.y + 0.5f), 0, h - 1);
-        const int16_t* g = grad.data() + (static_cast<size_t>(yi) * static_cast<size_t>(w) +
-                                          static_cast<size_t>(xi)) * 2;
-        const float gx = g[0], gy = g[1];
-        const float gp = gx * n.x + gy * n.y;
-        const float gl = gx * d.x + gy * d.y;
-        pos_p += gp > 0 ? gp : 0.f;
-        neg_p -= gp > 0 ? 0.f : gp;
-        pos_l += gl > 0 ? gl : 0.f;
-        neg_l -= gl > 0 ? 0.f : gl;
+    std::fill(pos_p.begin(), pos_p.end(), 0.f);
+    std::fill(neg_p.begin(), neg_p.end(), 0.f);
+    std::fill(pos_l.begin(), pos_l.end(), 0.f);
+    std::fill(neg_l.begin(), neg_l.end(), 0.f);
+    // Samples in order along the segment, all rows at once: each row's sums receive the same
+    // additions in the same order as a row-by-row loop (the same descriptor bits, checked on
+    // the Pepper images of bench_extract_real at QVGA and VGA), but the loops over rows have no
+    // dependency between iterations, so the compiler vectorises the positions and the sums;
+    // only the gradient lookup stays scalar. ~2x faster than row by row.
+    for (int k = 0; k < samples; ++k) {
+      const cv::Point2f c = p0 + dvec * ((k + 0.5f) / samples);
+      // Nearest pixel as GradientSampler::at.
+      for (int r = 0; r < rows; ++r) {
+        const int xi = std::clamp(static_cast<int>(c.x + off[r] * n.x + 0.5f), 0, w - 1);
+        const int yi = std::clamp(static_cast<int>(c.y + off[r] * n.y + 0.5f), 0, h - 1);
+        at[r] = (yi * w + xi) * 2;
       }
-      row_sums[r] = {pos_p, neg_p, pos_l, neg_l};
+      for (int r = 0; r < rows; ++r) {
+        gx[r] = grad[static_cast<size_t>(at[r])];
+        gy[r] = grad[static_cast<size_t>(at[r]) + 1];
+      }
+      for (int r = 0; r < rows; ++r) {
+        const float gp = gx[r] * n.x + gy[r] * n.y;
+        const float gl = gx[r] * d.x + gy[r] * d.y;
+        // std::max(0, g) is `0 < g ? g : 0` and std::min(g, 0) is `0 < g ? 0 : g`: the sums of
+        // a branch on the sign, without one.
+        pos_p[r] += std::max(0.f, gp);
+        neg_p[r] -= std::min(gp, 0.f);
+        pos_l[r] += std::max(0.f, gl);
+        neg_l[r] -= std::min(gl, 0.f);
+      }
     }
     float* out = desc.ptr<float>(static_cast<int>(i));
     const float inv_samples = 1.0f / static_cast<float>(samples);
+    const std::array<const float*, 4> sums{pos_p.data(), neg_p.data(), pos_l.data(), neg_l.data()};
     for (int b = 0; b < kBands; ++b) {
       std::array<float, 4> mean{0, 0, 0, 0}, sq{0, 0, 0, 0};
       for (int r = b * band_width_px; r < (b + 1) * band_width_px; ++r) {
         for (int c = 0; c < 4; ++c) {
-          const float v = row_sums[r][c] * wg[r] * inv_samples;
+          const float v = sums[c][r] * wg[r] * inv_samples;
           mean[c] += v;
           sq[c] += v * v;
         }

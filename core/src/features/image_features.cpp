@@ -247,15 +247,22 @@ ImageFeatures FeatureExtractor::extract(const cv::Mat& gray, unsigned parts) con
   if (parts & kPartLines) f.lines = detect_lines(klt_image(gray, options_.klt), f.intrinsics, options_, f.line_descriptors);
   else f.line_descriptors = cv::Mat(0, kLbdDims, CV_32F);
   if (parts & kPartCorners) f.corners_px = detect_corners(gray, options_);
-  // ORB needs room for its 31 px patches on its pyramid (smaller images: no keypoints).
-  if ((parts & kPartWideBaseline) && options_.orb_max_features > 0 &&
-      std::min(gray.cols, gray.rows) >= kMinSideForOrb) {
-    auto orb = cv::ORB::create(options_.orb_max_features);
-    orb->detectAndCompute(gray, cv::noArray(), f.keypoints, f.keypoint_descriptors);
-  }
+  if (parts & kPartWideBaseline) add_wide_baseline(f);
   // Scharr derivatives only for images tracked from (they have corners).
   if (parts & kPartPyramid) build_klt_pyramid(f, options_.klt, (parts & kPartCorners) != 0);
   return f;
+}
+
+void FeatureExtractor::add_wide_baseline(ImageFeatures& f) const {
+  if (f.gray.empty() || f.gray.type() != CV_8UC1)
+    throw std::invalid_argument("FeatureExtractor::add_wide_baseline: the features hold no grey image");
+  f.keypoints.clear();
+  f.keypoint_descriptors = cv::Mat();
+  // ORB needs room for its 31 px patches on its pyramid (smaller images: no keypoints).
+  if (options_.orb_max_features > 0 && std::min(f.gray.cols, f.gray.rows) >= kMinSideForOrb) {
+    auto orb = cv::ORB::create(options_.orb_max_features);
+    orb->detectAndCompute(f.gray, cv::noArray(), f.keypoints, f.keypoint_descriptors);
+  }
 }
 
 }  // namespace pepper::core::features

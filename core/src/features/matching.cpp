@@ -688,6 +688,21 @@ FrameMatcher::FrameMatcher(ImageFeatures current, const MatcherOptions& options)
   if (!ok) build_klt_pyramid(current_, options_.klt, false);  // only tracked into: no derivatives
 }
 
+FrameMatcher::FrameMatcher(ImageFeatures current, const MatcherOptions& options,
+                           const FeatureExtractor* wide_baseline_extractor)
+    : FrameMatcher(std::move(current), options) {
+  if (current_.keypoints.empty()) wide_baseline_extractor_ = wide_baseline_extractor;
+}
+
+bool FrameMatcher::current_keypoints() {
+  if (wide_baseline_extractor_ != nullptr) {
+    const ScopedMs ms(&timings_.wide_baseline_ms);
+    wide_baseline_extractor_->add_wide_baseline(current_);
+    wide_baseline_extractor_ = nullptr;
+  }
+  return !current_.keypoints.empty();
+}
+
 void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior) {
   klt_priors_[key_id] = std::move(prior);
 }
@@ -705,7 +720,7 @@ const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures
 const TwoViewMatches& FrameMatcher::two_view_for_control(int64_t key_id, const ImageFeatures& key) {
   const TwoViewMatches& klt = two_view(key_id, key);
   if (klt.n_points() >= options_.orb_fallback_below_points || key.keypoints.empty() ||
-      current_.keypoints.empty()) {
+      !current_keypoints()) {
     return klt;
   }
   auto it = control_.find(key_id);
@@ -745,6 +760,7 @@ const ThreeViewMatches& FrameMatcher::three_view(int64_t x_id, const ImageFeatur
 const TwoViewMatches& FrameMatcher::wide_baseline(int64_t key_id, const ImageFeatures& key) {
   auto it = wide_.find(key_id);
   if (it != wide_.end()) return it->second;
+  current_keypoints();
   return wide_.emplace(key_id, match_wide_baseline(key, current_, options_, &timings_))
       .first->second;
 }

@@ -457,7 +457,9 @@ bool Navigator::vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev,
       .has_value();
 }
 
-double Navigator::taught_turn_curvature_1_m(const features::TwoViewMatches* next_prev) {
+double Navigator::taught_turn_curvature_1_m(
+    const features::TwoViewMatches* next_prev,
+    std::optional<std::optional<control::PlanarPose>>* arc_fit) {
   const localization::Segment& seg = switcher_->segment();
   const int64_t key_pair =
       static_cast<int64_t>(seg.prev) * static_cast<int64_t>(map_.key_images.size()) + seg.next;
@@ -474,9 +476,15 @@ double Navigator::taught_turn_curvature_1_m(const features::TwoViewMatches* next
     if (!next_prev) {
       matched = features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
       next_prev = &*matched;
+      arc_fit = nullptr;  // a fit to other matches than the caller's
     }
-    const auto prev = control::fit_arc_segment(corner_observations(*next_prev),
-                                               map_.camera.fx_px, options_.vnhv.pose);
+    std::optional<std::optional<control::PlanarPose>> own_fit;
+    if (arc_fit == nullptr) arc_fit = &own_fit;
+    if (!arc_fit->has_value()) {
+      arc_fit->emplace(control::fit_arc_segment(corner_observations(*next_prev),
+                                                map_.camera.fx_px, options_.vnhv.pose));
+    }
+    const std::optional<control::PlanarPose>& prev = **arc_fit;
     // IP's yaw in IN's frame is minus the turn from IP to IN.
     if (prev && std::abs(prev->yaw_rad) > options_.vnhv.max_segment_turn_rad) {
       curvature_1_m = -prev->yaw_rad / taught_m;
@@ -525,11 +533,14 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     const double taught_m = segment_taught_m();
     const features::TwoViewMatches next_prev =
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
-    // The turn feed-forward fits its taught turn to the same matches (once per segment).
-    if (options_.turn_feedforward > 0.0) taught_turn_curvature_1_m(&next_prev);
+    // The turn feed-forward fits its taught turn to the same matches (once per segment), and
+    // the model below takes the same fit (focal_px is map_.camera.fx_px there too).
+    std::optional<std::optional<control::PlanarPose>> arc_fit;
+    if (options_.turn_feedforward > 0.0) taught_turn_curvature_1_m(&next_prev, &arc_fit);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
-      const auto prev = control::fit_arc_segment(obs, focal_px, o.pose);
+      if (!arc_fit) arc_fit.emplace(control::fit_arc_segment(obs, focal_px, o.pose));
+      const std::optional<control::PlanarPose>& prev = *arc_fit;
       const double turn_rad = prev ? std::abs(prev->yaw_rad) : 0.0;
       if (prev && turn_rad <= o.max_segment_turn_rad && taught_m >= o.straight_min_length_m) {
         // A long straight segment: distant points count too.
@@ -640,12 +651,13 @@ features::FrameMatcher Navigator::perceive(const Frame& frame, bool for_localisa
                                            Telemetry& tel) {
   const auto t0 = Clock::now();
   unsigned parts = features::kPartsCurrentFrame;
-  // ORB keypoints: for the initial localisation, and every frame with the ORB fallback.
-  if (for_localisation ||
-      (options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points)) {
-    parts |= features::kPartWideBaseline;
-  }
-  features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher);
+  // ORB keypoints: for the initial localisation now; with the ORB fallback, when a match first
+  // needs them (most frames verify enough KLT points and never do).
+  if (for_localisation) parts |= features::kPartWideBaseline;
+  const bool orb_fallback =
+      options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points;
+  features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher,
+                            orb_fallback ? &extractor_ : nullptr);
   for (auto& [i, points] : klt_priors_) fm.set_klt_prior(i, std::move(points));
   klt_priors_.clear();
   tel.timings.extract_ms = ms_since(t0);

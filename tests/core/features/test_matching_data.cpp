@@ -135,6 +135,45 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
   EXPECT_FALSE(b.points_from_orb);
 }
 
+// The current frame's ORB keypoints extracted only when the fallback needs them (FrameMatcher
+// given the extractor): the same matches as with keypoints extracted up front, and no ORB on a
+// frame where KLT verifies enough.
+TEST_F(VispSequenceData, OrbKeypointsOfTheCurrentFrameOnlyWhenTheFallbackNeedsThem) {
+  FeatureExtractorOptions raw;
+  raw.klt.normalise_window_px = 0;
+  const FeatureExtractor ex(cube_camera(), raw);
+  const ImageFeatures key = load(ex, cube_frame(0));
+  cv::Mat dim;
+  to_gray(cv::imread(cube_frame(1), cv::IMREAD_UNCHANGED)).convertTo(dim, CV_8U, 0.5);
+  MatcherOptions o;
+  o.klt.normalise_window_px = 0;
+  o.orb_fallback_below_points = 100;
+  FrameMatcher eager(ex.extract(dim, kPartsCurrentFrame | kPartWideBaseline), o);
+  FrameMatcher lazy(ex.extract(dim, kPartsCurrentFrame), o, &ex);
+  EXPECT_TRUE(lazy.current().keypoints.empty());
+  lazy.two_view(0, key);  // the switching counts need no ORB
+  EXPECT_TRUE(lazy.current().keypoints.empty());
+  const TwoViewMatches& e = eager.two_view_for_control(0, key);
+  const TwoViewMatches& l = lazy.two_view_for_control(0, key);
+  ASSERT_TRUE(e.points_from_orb);
+  EXPECT_TRUE(l.points_from_orb);
+  EXPECT_EQ(lazy.current().keypoints.size(), eager.current().keypoints.size());
+  ASSERT_EQ(l.n_points(), e.n_points());
+  for (size_t i = 0; i < e.points.size(); ++i) {
+    EXPECT_EQ(l.points[i].idx_a, e.points[i].idx_a);
+    EXPECT_EQ(l.points[i].idx_b, e.points[i].idx_b);
+  }
+  EXPECT_EQ(lazy.wide_baseline(0, key).n_points(), eager.wide_baseline(0, key).n_points());
+  EXPECT_GT(lazy.timings().wide_baseline_ms, 0.0);  // the extraction counts there
+  // Same light: KLT has plenty, the fallback (below 20) never asks for ORB.
+  o.orb_fallback_below_points = 20;
+  FrameMatcher bright(ex.extract(to_gray(cv::imread(cube_frame(1), cv::IMREAD_UNCHANGED)),
+                                 kPartsCurrentFrame),
+                      o, &ex);
+  EXPECT_FALSE(bright.two_view_for_control(0, key).points_from_orb);
+  EXPECT_TRUE(bright.current().keypoints.empty());
+}
+
 // Lines only / points only (METHOD.md): a kind switched off is not matched in two, three or
 // wide-baseline views, and the other kind is matched as before except for what the switched-off
 // kind would have lent it (lines: no epipolar check without points; points: no KLT start from

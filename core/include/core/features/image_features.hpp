@@ -159,6 +159,12 @@ class FeatureExtractor {
   /// feature lists. `gray` is shared (not copied) into the result.
   ImageFeatures extract(const cv::Mat& gray, unsigned parts = kPartsAll) const;
 
+  /// Adds the wide-baseline part (ORB keypoints and descriptors) to features extracted without
+  /// it, from their own image: the same keypoints as extract() with kPartWideBaseline would
+  /// have given (none on images under 80 px or with orb_max_features 0). Throws
+  /// std::invalid_argument when `features` holds no CV_8UC1 image.
+  void add_wide_baseline(ImageFeatures& features) const;
+
   const FeatureExtractorOptions& options() const { return options_; }
   const CameraIntrinsics& camera() const { return camera_; }
 

@@ -190,6 +190,13 @@ class FrameMatcher {
   /// Builds the current frame's KLT pyramid if missing (no derivatives: only tracked into).
   /// Throws std::invalid_argument when the options are invalid or `current` has no image.
   explicit FrameMatcher(ImageFeatures current, const MatcherOptions& options = {});
+  /// The same, with the current frame's ORB keypoints extracted by `wide_baseline_extractor`
+  /// the first time a match needs them (the ORB fallback of two_view_for_control(),
+  /// wide_baseline()) when `current` has none: most frames never need them (ORB on every frame
+  /// was a third of the extraction at QVGA, bench_extract_real). The extractor must outlive
+  /// this matcher; its time counts in timings().wide_baseline_ms.
+  FrameMatcher(ImageFeatures current, const MatcherOptions& options,
+               const FeatureExtractor* wide_baseline_extractor);
 
   const ImageFeatures& current() const { return current_; }
   const MatcherOptions& options() const { return options_; }
@@ -226,8 +233,13 @@ class FrameMatcher {
   struct PairHash {
     size_t operator()(const std::pair<int64_t, int64_t>& p) const noexcept;
   };
+  /// Extracts the current frame's ORB keypoints if they are due (see the constructor); whether
+  /// it has any.
+  bool current_keypoints();
+
   ImageFeatures current_;
   MatcherOptions options_;
+  const FeatureExtractor* wide_baseline_extractor_ = nullptr;  ///< null once used
   MatchTimings timings_;
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;

@@ -270,8 +270,12 @@ class Navigator {
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
   /// turn_feedforward: the current segment's taught curvature (> 0 left), 1/m; 0 on a segment
   /// taught straight or without a fit. Fitted once per segment (then cached), to next_prev (IN's
-  /// corners tracked into IP) when given, else to a match of its own.
-  double taught_turn_curvature_1_m(const features::TwoViewMatches* next_prev = nullptr);
+  /// corners tracked into IP) when given, else to a match of its own. arc_fit (with next_prev):
+  /// control::fit_arc_segment of next_prev, used when it holds one and set when this computes
+  /// it, so that VNHV's segment model reuses the same fit (a grid of ~1900 angles).
+  double taught_turn_curvature_1_m(
+      const features::TwoViewMatches* next_prev = nullptr,
+      std::optional<std::optional<control::PlanarPose>>* arc_fit = nullptr);
   /// turn_feedforward and turn_feedforward_max_lead_rad on IBVS's demand: the demand to use.
   double apply_taught_turn(double omega_rad_s, Telemetry& tel);
   /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
