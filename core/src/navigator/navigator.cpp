@@ -752,6 +752,15 @@ void Navigator::switch_key_images(const SegmentEvidence& ev, int64_t t_ns, StepF
 
 std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& tel) {
   std::optional<double> omega;
+  // Teaching turned here without moving: so does the replay (v = 0 in take(), omega below).
+  // Measured (gen_building_3, QVGA, run 1): on a 90-degree spot turn seen with 1-5 lines, IBVS
+  // turned at the schedule's speed and drove 0.2 m past the turn, then 24 m with a 43 cm offset
+  // to a wrong end.
+  on_taught_spot_turn_ = false;
+  if (odom_ && tracker_.usable() && tracker_.estimate()) {
+    const std::optional<PathDeviation> d = tracker_.deviation();
+    on_taught_spot_turn_ = d && d->in_place;
+  }
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
   if (!omega) {
     omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
@@ -771,6 +780,15 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
     } else if (omega && options_.turn_feedforward > 0.0 && unlocated && segment_from_switch_) {
       omega = apply_taught_turn(*omega, tel);
     }
+  }
+  if (omega && on_taught_spot_turn_ && !tel.odometry_steered) {
+    // Neither law is made for a turn without translation (VNHV's needs v > 0; IBVS, with the
+    // few features a turn's view often keeps, may see no heading error and leave the robot
+    // standing: gen_building_3 run 1 stood until the segment was overdue): the odometry turns
+    // to the piece's taught end heading, as in dead reckoning; vision takes over after it.
+    bool on_the_spot = false;
+    omega = odometry_demand(on_the_spot);
+    tel.odometry_steered = true;
   }
   {  // display only; the control law above already computed (and cached) these matches
     const int in = switcher_->segment().next;
@@ -827,7 +845,7 @@ Command Navigator::take(const Transition& t, int64_t t_ns, std::optional<double>
       tel.omega_demand_rad_s = *demand;
       const control::BaseCommand b = schedule_.step(*demand, t_ns);
       Command cmd;
-      cmd.v_m_s = b.v_m_s;
+      cmd.v_m_s = on_taught_spot_turn_ ? 0.0 : b.v_m_s;
       cmd.omega_rad_s = b.omega_rad_s;
       cmd.stop = false;
       cmd.reason = StopReason::kNone;

@@ -140,13 +140,13 @@ TEST_F(VispSequenceData, OrbFallbackKeepsPointsWhenTheLightHalves) {
 // frame where KLT verifies enough.
 TEST_F(VispSequenceData, OrbKeypointsOfTheCurrentFrameOnlyWhenTheFallbackNeedsThem) {
   FeatureExtractorOptions raw;
-  raw.klt.normalise_window_px = 0;
+  raw.klt.normalise_window_frac = 0;
   const FeatureExtractor ex(cube_camera(), raw);
   const ImageFeatures key = load(ex, cube_frame(0));
   cv::Mat dim;
   to_gray(cv::imread(cube_frame(1), cv::IMREAD_UNCHANGED)).convertTo(dim, CV_8U, 0.5);
   MatcherOptions o;
-  o.klt.normalise_window_px = 0;
+  o.klt.normalise_window_frac = 0;
   o.orb_fallback_below_points = 100;
   FrameMatcher eager(ex.extract(dim, kPartsCurrentFrame | kPartWideBaseline), o);
   FrameMatcher lazy(ex.extract(dim, kPartsCurrentFrame), o, &ex);

@@ -331,6 +331,10 @@ class Navigator {
   /// This frame, VNHV had no estimate of the robot on the segment: no model, or a model that
   /// has not located the current image yet.
   bool vnhv_unlocated_ = true;
+  /// This frame, odometry places the robot on a piece of the taught path that teaching turned on
+  /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
+  /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.
+  bool on_taught_spot_turn_ = false;
   // turn_feedforward: taught curvature per segment, key (IP, IN) -> 1/m. A function of the map
   // only, so it is kept across segments and resets.
   std::unordered_map<int64_t, double> taught_curvature_by_segment_;
