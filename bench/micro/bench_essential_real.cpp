@@ -36,16 +36,13 @@
 
 #include "core/features/image_features.hpp"
 #include "core/features/matching.hpp"
+#include "real_data_dir.hpp"
 
 namespace {
 using namespace pepper;
 namespace fs = std::filesystem;
 
-fs::path data_dir() {
-  if (const char* env = std::getenv("PEPPER_QUT_TMAP_DIR"); env != nullptr && *env != '\0')
-    return env;
-  return fs::path(PEPPER_SHARED_DIR) / "data" / "pepper_qut_tmap";
-}
+fs::path data_dir() { return bench::real_data_dir(); }
 
 std::vector<core::features::ImageFeatures> load(const std::string& route) {
   std::vector<fs::path> files;

@@ -28,16 +28,13 @@
 
 #include "core/camera/intrinsics.hpp"
 #include "core/features/image_features.hpp"
+#include "real_data_dir.hpp"
 
 namespace {
 using namespace pepper;
 namespace fs = std::filesystem;
 
-fs::path data_dir() {
-  if (const char* env = std::getenv("PEPPER_QUT_TMAP_DIR"); env != nullptr && *env != '\0')
-    return env;
-  return fs::path(PEPPER_SHARED_DIR) / "data" / "pepper_qut_tmap";
-}
+fs::path data_dir() { return bench::real_data_dir(); }
 
 std::vector<cv::Mat> load(const cv::Size& size) {
   std::vector<fs::path> files;

@@ -85,6 +85,7 @@
 #include "core/camera/intrinsics.hpp"
 #include "core/features/image_features.hpp"
 #include "core/navigator/navigator.hpp"
+#include "real_data_dir.hpp"
 
 namespace {
 using namespace pepper;
@@ -95,11 +96,7 @@ constexpr int64_t kFrameSpacingNs = 333'333'333;   // replay: three frames per k
 constexpr int kPassFrames = 66;
 constexpr int kIterations = 3 * kPassFrames;       // steps per repetition
 
-fs::path data_dir() {
-  if (const char* env = std::getenv("PEPPER_QUT_TMAP_DIR"); env != nullptr && *env != '\0')
-    return env;
-  return fs::path(PEPPER_SHARED_DIR) / "data" / "pepper_qut_tmap";
-}
+fs::path data_dir() { return bench::real_data_dir(); }
 
 core::CameraIntrinsics qvga() {
   // The calibration of shared/data/README.md (fx 298.13, fy 298.72, cx 159.15, cy 118.91).

@@ -182,7 +182,9 @@ std::string replace_all(std::string s, const std::string& from, const std::strin
 class ErrorsTable : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "pepper_e2e_errors";
+    // One folder per test process: ctest -j2 runs this suite's tests side by side, and each
+    // would otherwise remove the other's fixture map while it is being taught.
+    dir_ = fs::temp_directory_path() / ("pepper_e2e_errors_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "tmp");
     fs::create_directories(dir_ / "empty");
@@ -202,6 +204,10 @@ class ErrorsTable : public ::testing::Test {
     r = replace_all(r, "%MAP%", (dir_ / "map").string());
     r = replace_all(r, "%JUNK_MAP%", (dir_ / "junk_map").string());
     return replace_all(r, "%EMPTY%", (dir_ / "empty").string());
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
   }
   static fs::path dir_;
   static bool map_ok_;
