@@ -170,16 +170,7 @@ BENCHMARK(BM_Fast)->Unit(benchmark::kMillisecond)->Iterations(1);
 }  // namespace
 
 int main(int argc, char** argv) {
-  cv::setNumThreads(1);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  try {
+  return pepper::bench::run_real_benchmarks(argc, argv, "bench_essential_real", [] {
     data();
-  } catch (const std::exception& e) {
-    std::cerr << "bench_essential_real: " << e.what() << " (set PEPPER_QUT_TMAP_DIR)\n";
-    return 2;
-  }
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  });
 }

@@ -97,16 +97,7 @@ BENCHMARK(BM_ExtractRealVga)->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 int main(int argc, char** argv) {
-  cv::setNumThreads(1);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  try {
+  return pepper::bench::run_real_benchmarks(argc, argv, "bench_extract_real", [] {
     load(cv::Size(320, 240));
-  } catch (const std::exception& e) {
-    std::cerr << "bench_extract_real: " << e.what() << "\n";
-    return 2;
-  }
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  });
 }

@@ -342,23 +342,8 @@ BENCHMARK(BM_RealNavigatorStepVgaFast)->Unit(benchmark::kMillisecond)->Iteration
 }  // namespace
 
 int main(int argc, char** argv) {
-  cv::setNumThreads(1);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  // Load (and build the maps) before any benchmark runs, so missing data fails the program
-  // instead of being reported as a skipped benchmark.
-  try {
-    if (!fs::is_directory(data_dir()))
-      throw std::runtime_error("real Pepper data folder " + data_dir().string() +
-                               " not found (shared/data/pepper_qut_tmap; set "
-                               "PEPPER_QUT_TMAP_DIR to its folder)");
+  return pepper::bench::run_real_benchmarks(argc, argv, "bench_navigator_real", [] {
     qvga_sequence();
     vga_sequence();
-  } catch (const std::exception& e) {
-    std::cerr << "bench_navigator_real: " << e.what() << "\n";
-    return 2;
-  }
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  });
 }
