@@ -58,6 +58,22 @@ bool fit_linear(const std::vector<cv::Point2d>& a, const std::vector<cv::Point2d
   return E.allFinite();
 }
 
+// E's inliers within `thr`, then up to three linear refits on them while each gains inliers
+// (E is replaced by the last refit that did).
+std::vector<int> grow_by_linear_refit(const std::vector<cv::Point2d>& a,
+                                      const std::vector<cv::Point2d>& b, double thr,
+                                      Eigen::Matrix3d& E) {
+  std::vector<int> inl = classify(a, b, E, thr);
+  Eigen::Matrix3d Er;
+  for (int round = 0; round < 3 && fit_linear(a, b, inl, Er); ++round) {
+    std::vector<int> inl2 = classify(a, b, Er, thr);
+    if (inl2.size() <= inl.size()) break;
+    inl = std::move(inl2);
+    E = Er;
+  }
+  return inl;
+}
+
 struct Decomposition {
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
@@ -245,14 +261,7 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
       std::vector<int> net_inliers;
       if (static_cast<int>(net.size()) >= std::max(5, options.min_inliers) &&
           five_point(net_a, net_b, focal_px, general, ranked, Em, net_inliers)) {
-        inl = classify(a_norm, b_norm, Em, thr);
-        Eigen::Matrix3d Er;
-        for (int round = 0; round < 3 && fit_linear(a_norm, b_norm, inl, Er); ++round) {
-          std::vector<int> inl2 = classify(a_norm, b_norm, Er, thr);
-          if (inl2.size() <= inl.size()) break;
-          inl = std::move(inl2);
-          Em = Er;
-        }
+        inl = grow_by_linear_refit(a_norm, b_norm, thr, Em);
         have = true;
       }
     } else if (pr.found) {
@@ -268,14 +277,7 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
         if (!fit_linear(a_norm, b_norm, classify(a_norm, b_norm, Em, factor * thr), Er)) break;
         Em = Er;
       }
-      inl = classify(a_norm, b_norm, Em, thr);
-      Eigen::Matrix3d Er;
-      for (int round = 0; round < 3 && fit_linear(a_norm, b_norm, inl, Er); ++round) {
-        std::vector<int> inl2 = classify(a_norm, b_norm, Er, thr);
-        if (inl2.size() <= inl.size()) break;
-        inl = std::move(inl2);
-        Em = Er;
-      }
+      inl = grow_by_linear_refit(a_norm, b_norm, thr, Em);
       have = true;
     }
   }
