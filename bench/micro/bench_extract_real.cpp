@@ -94,6 +94,26 @@ BENCHMARK(BM_ExtractRealQvga)->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
 void BM_ExtractRealVga(benchmark::State& state) { run(state, cv::Size(640, 480)); }
 BENCHMARK(BM_ExtractRealVga)->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
 
+// The locally normalised grey image alone (klt_image with the default window), which the lines
+// and the KLT pyramid of every current frame are computed on.
+void normalise(benchmark::State& state, const cv::Size& size) {
+  const std::vector<cv::Mat> images = load(size);
+  const core::features::KltOptions klt;
+  double cpu_ms = 0.0;
+  int64_t n = 0;
+  for (auto _ : state) {
+    const double t0 = thread_cpu_ms();
+    for (const cv::Mat& g : images) benchmark::DoNotOptimize(core::features::klt_image(g, klt).data);
+    cpu_ms += thread_cpu_ms() - t0;
+    n += static_cast<int64_t>(images.size());
+  }
+  state.counters["cpu_per_image_ms"] = cpu_ms / static_cast<double>(std::max<int64_t>(1, n));
+}
+void BM_NormaliseRealQvga(benchmark::State& state) { normalise(state, cv::Size(320, 240)); }
+BENCHMARK(BM_NormaliseRealQvga)->Unit(benchmark::kMillisecond);
+void BM_NormaliseRealVga(benchmark::State& state) { normalise(state, cv::Size(640, 480)); }
+BENCHMARK(BM_NormaliseRealVga)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 int main(int argc, char** argv) {

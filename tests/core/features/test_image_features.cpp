@@ -122,6 +122,60 @@ TEST(FeatureExtractor, PartsSelectWhatIsComputed) {
   EXPECT_FALSE(f.klt_pyramid.empty());
 }
 
+// The normalised image's definition, written out per pixel (image_features.hpp): klt_image
+// computes it with SIMD lanes and must give every pixel the same value.
+cv::Mat normalised_by_formula(const cv::Mat& gray, int window_px) {
+  cv::Mat f, mean, mean_sq;
+  gray.convertTo(f, CV_32F);
+  cv::boxFilter(f, mean, CV_32F, cv::Size(window_px, window_px), cv::Point(-1, -1), true,
+                cv::BORDER_REFLECT);
+  cv::boxFilter(f.mul(f), mean_sq, CV_32F, cv::Size(window_px, window_px), cv::Point(-1, -1), true,
+                cv::BORDER_REFLECT);
+  cv::Mat out(gray.size(), CV_8UC1);
+  for (int y = 0; y < gray.rows; ++y)
+    for (int x = 0; x < gray.cols; ++x) {
+      const float m = mean.at<float>(y, x);
+      const float sigma = std::max(std::sqrt(std::max(mean_sq.at<float>(y, x) - m * m, 0.0f)), 6.0f);
+      out.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(128.0f + 32.0f * (f.at<float>(y, x) - m) / sigma);
+    }
+  return out;
+}
+
+TEST(NormalisedImage, SimdMatchesTheScalarFormula) {
+  const KltOptions klt;
+  cv::RNG rng(11);
+  // Odd widths exercise the scalar tail; noise, hard edges and flat areas (sigma floor) and
+  // saturation (isolated extreme pixels in a flat area) exercise every branch of the formula.
+  for (const cv::Size size : {cv::Size(320, 240), cv::Size(640, 480), cv::Size(97, 61), cv::Size(33, 17)}) {
+    cv::Mat g = drawn_scene(size.width, size.height);
+    cv::Mat noise(size, CV_8UC1);
+    rng.fill(noise, cv::RNG::UNIFORM, 0, 40);
+    g(cv::Rect(0, 0, size.width / 2, size.height)) += noise(cv::Rect(0, 0, size.width / 2, size.height));
+    for (int i = 0; i < 20; ++i)
+      g.at<uint8_t>(rng.uniform(0, size.height), rng.uniform(0, size.width)) = rng.uniform(0, 2) ? 0 : 255;
+    const cv::Mat simd = klt_image(g, klt);
+    const cv::Mat ref = normalised_by_formula(g, klt.normalise_window_px(size.width));
+    ASSERT_EQ(simd.type(), CV_8UC1);
+    EXPECT_EQ(cv::countNonZero(simd != ref), 0) << size;
+    if (size.width < 97) continue;  // too few pixels to be sure of reaching both bounds
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(ref, &lo, &hi);
+    EXPECT_EQ(lo, 0) << "the test image must reach the lower saturation, at " << size;
+    EXPECT_EQ(hi, 255) << "the test image must reach the upper saturation, at " << size;
+  }
+}
+
+TEST(NormalisedImage, ExtractBuildsThePyramidOnTheSameImage) {
+  const FeatureExtractor ex;
+  const cv::Mat g = drawn_scene(640, 480);
+  ImageFeatures once = ex.extract(g, kPartsCurrentFrame);
+  ImageFeatures separate = once;
+  build_klt_pyramid(separate, FeatureExtractorOptions{}.klt, false);
+  ASSERT_EQ(once.klt_pyramid.size(), separate.klt_pyramid.size());
+  for (size_t i = 0; i < once.klt_pyramid.size(); ++i)
+    EXPECT_EQ(cv::norm(once.klt_pyramid[i], separate.klt_pyramid[i], cv::NORM_INF), 0.0) << i;
+}
+
 TEST(Matching, ShiftedImageMatchesLinesAndPoints) {
   const FeatureExtractor ex;
   const ImageFeatures a = ex.extract(drawn_scene(640, 480));
