@@ -274,6 +274,7 @@ class FakeSession {
     json keys = json::array();
     json taught = json::array();
     json replayed = json::array();
+    json blind = json::array();  // a stretch driven on odometry alone
     json key_xy = json::array();
     json dummy;
     for (int i = 0; i < 12; ++i) {
@@ -291,6 +292,7 @@ class FakeSession {
       taught.push_back({x, y});
       if (k % 10 == 0) key_xy.push_back({x, y});
       if (k <= 80) replayed.push_back({x + 0.02, y + 0.05 * std::sin(k * 0.3) + 0.03});
+      if (k >= 40 && k <= 50) blind.push_back(replayed.back());
     }
     teach_keys_ = keys;
     server_.publish_state(
@@ -302,7 +304,7 @@ class FakeSession {
            {"min_points", 40},
            {"weak_key_images", {7}},
            {"path", "maps/fake_tour"}}},
-         {"trajectory", {{"taught", taught}, {"replayed", replayed}, {"keys", key_xy}}},
+         {"trajectory", {{"taught", taught}, {"replayed", replayed}, {"blind", blind}, {"keys", key_xy}}},
          {"offline", {{"max_lateral_error_m", 0.081}, {"mean_lateral_error_m", 0.034}}}});
     replaying_ = true;
   }

@@ -605,12 +605,17 @@
     for (const [x, y] of keys) { ctx.beginPath(); ctx.arc(tx(x), ty(y), 3.5, 0, 2 * Math.PI); ctx.fill(); }
     path(taught, '#2563eb', 3, []);
     path(replayed, '#f97316', 2, [6, 4]);
+    // Where the replay drove on odometry alone (vision blind): red dots over the replayed path.
+    const blind = tr.blind || [];
+    ctx.fillStyle = '#dc2626';
+    for (const [x, y] of blind) { ctx.beginPath(); ctx.arc(tx(x), ty(y), 3, 0, 2 * Math.PI); ctx.fill(); }
     ctx.fillStyle = '#6b7280'; ctx.font = '11px sans-serif';
     ctx.fillText(`grid ${step} m`, 8, H - 8);
     const o = ui.state.offline || {};
     fillKv('offline-kv', [
       ['taught', `${taught.length} poses`],
       ['replayed', `${replayed.length} poses`],
+      ['on odometry alone (red)', `${blind.length} poses`],
       // Lateral error needs ground truth: the simulated robot has it, a real one does not.
       ['max lateral error', lateral(o.max_lateral_error_m)],
       ['mean lateral error', lateral(o.mean_lateral_error_m)],

@@ -179,11 +179,15 @@ async function main() {
       const painted = await page.evaluate(() => {
         const c = document.getElementById('topview');
         const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-        let blue = 0;
-        for (let i = 0; i < d.length; i += 4) if (d[i + 2] > 200 && d[i] < 80) blue++;
-        return blue;
+        let blue = 0; let red = 0;
+        for (let i = 0; i < d.length; i += 4) {
+          if (d[i + 2] > 200 && d[i] < 80) blue++;
+          if (d[i] > 200 && d[i + 1] < 60 && d[i + 2] < 60) red++;  // #dc2626: driven blind
+        }
+        return { blue, red };
       });
-      if (painted < 50) throw new Error(`taught path not drawn (${painted} blue pixels)`);
+      if (painted.blue < 50) throw new Error(`taught path not drawn (${painted.blue} blue pixels)`);
+      if (painted.red < 20) throw new Error(`the blind stretch is not drawn (${painted.red} red pixels)`);
       return file;
     });
 

@@ -229,6 +229,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     double max_lateral_m = 0.0, sum_lateral_m = 0.0;
     int64_t n_lateral = 0;
     nlohmann::json replayed = nlohmann::json::array();
+    // The replayed poses driven on odometry alone (vision blind, issue 29), for the top view.
+    nlohmann::json blind = nlohmann::json::array();
     if (!options.taught_path_m.empty()) {  // constant: sent once, not with every "trajectory"
       nlohmann::json taught = nlohmann::json::array(), taught_keys = nlohmann::json::array();
       for (const auto& p : options.taught_path_m) taught.push_back({p.x(), p.y()});
@@ -387,6 +389,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         s.yaw_rad = gt.base.yaw_rad;
         line["ground_truth"] = {{"x_m", s.x_m}, {"y_m", s.y_m}, {"yaw_rad", s.yaw_rad}};
         replayed.push_back({s.x_m, s.y_m});
+        if (s.dead_reckoning) blind.push_back({s.x_m, s.y_m});
         const double lateral_m =
             distance_to_path_m(options.taught_path_m, Eigen::Vector2d(s.x_m, s.y_m));
         if (std::isfinite(lateral_m)) {
@@ -395,7 +398,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
           ++n_lateral;
         }
         if (link.has_ui() && result.frames % 5 == 0) {
-          nlohmann::json patch = {{"trajectory", {{"replayed", replayed}}},
+          nlohmann::json patch = {{"trajectory", {{"replayed", replayed}, {"blind", blind}}},
                                   {"pose", line["ground_truth"]}};
           if (n_lateral > 0) {
             patch["offline"] = {{"max_lateral_error_m", max_lateral_m},
