@@ -471,6 +471,17 @@ Pose2D parse_pose(Map& m, const std::string& key) {
 
 // ---------------------------------------------------------------------------------------------
 
+std::array<Eigen::Vector2d, 4> BoxObstacle::corners_m() const {
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  std::array<Eigen::Vector2d, 4> out;
+  const double sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+  for (int k = 0; k < 4; ++k) {
+    const double lx = sx[k] * half_size_m.x(), ly = sy[k] * half_size_m.y();
+    out[static_cast<size_t>(k)] = center_m + Eigen::Vector2d(c * lx - s * ly, s * lx + c * ly);
+  }
+  return out;
+}
+
 Eigen::Vector3d MovingObstacle::pose_at(double t_s) const {
   if (path_m.size() < 2) return {path_m.front().x(), path_m.front().y(), 0.0};
   std::vector<double> cum{0.0};

@@ -305,6 +305,10 @@ class FakeSession {
            {"weak_key_images", {7}},
            {"path", "maps/fake_tour"}}},
          {"trajectory", {{"taught", taught}, {"replayed", replayed}, {"blind", blind}, {"keys", key_xy}}},
+         // A corridor's two walls along the S-curve's band and a table beside it.
+         {"floor_plan",
+          {{"walls", {{-0.5, 1.6, 7.0, 1.6}, {-0.5, -1.6, 7.0, -1.6}}},
+           {"boxes", {{{2.0, -1.4}, {2.8, -1.4}, {2.8, -1.0}, {2.0, -1.0}}}}}},
          {"offline", {{"max_lateral_error_m", 0.081}, {"mean_lateral_error_m", 0.034}}}});
     replaying_ = true;
   }

@@ -387,7 +387,7 @@
       el.hidden = !s.stop_reason;
       el.textContent = s.stop_reason ? `Stopped: ${s.stop_reason}` : '';
     }
-    if ('trajectory' in patch || 'taught_path' in patch) drawTopView();
+    if ('trajectory' in patch || 'taught_path' in patch || 'floor_plan' in patch) drawTopView();
     if ('teach' in patch || 'replay' in patch) renderStrip();
   }
 
@@ -569,6 +569,10 @@
     const taught = tr.taught || tp.taught || []; const replayed = tr.replayed || [];
     const keys = tr.keys || tp.keys || [];
     const all = [...taught, ...replayed, ...keys];
+    // The world's walls and furniture (simulated robot only), drawn under the paths. The view is
+    // framed on the paths: a wall outside it is clipped (a large world does not shrink the tour).
+    const plan = ui.state.floor_plan || {};
+    const walls = plan.walls || []; const boxes = plan.boxes || [];
     if (!all.length) {
       ctx.fillStyle = '#6b7280'; ctx.font = '13px sans-serif';
       ctx.fillText('no trajectory yet', 16, 24);
@@ -592,6 +596,16 @@
     }
     for (let g = Math.floor((cy - span) / step) * step; g < cy + span; g += step) {
       ctx.beginPath(); ctx.moveTo(0, ty(g)); ctx.lineTo(W, ty(g)); ctx.stroke();
+    }
+    ctx.strokeStyle = '#9ca3af'; ctx.lineWidth = 1;
+    for (const corners of boxes) {
+      ctx.beginPath();
+      corners.forEach(([x, y], i) => (i ? ctx.lineTo(tx(x), ty(y)) : ctx.moveTo(tx(x), ty(y))));
+      ctx.closePath(); ctx.stroke();
+    }
+    ctx.strokeStyle = '#374151'; ctx.lineWidth = 3;
+    for (const [ax, ay, bx, by] of walls) {
+      ctx.beginPath(); ctx.moveTo(tx(ax), ty(ay)); ctx.lineTo(tx(bx), ty(by)); ctx.stroke();
     }
     const path = (pts, color, width, dash) => {
       if (pts.length < 2) return;

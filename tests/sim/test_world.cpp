@@ -226,3 +226,28 @@ TEST(World, ReplayStartsArePerturbedWithinRangesDeterministically) {
 
 }  // namespace
 }  // namespace pepper::sim
+
+namespace pepper::sim {
+namespace {
+
+// The footprint drawn in reports and the UI: a 1 m x 0.5 m box at (1, 2) turned by 90 degrees
+// covers x in [0.75, 1.25] and y in [1.5, 2.5], corners counter-clockwise.
+TEST(World, BoxCornersAreTheTurnedFootprint) {
+  BoxObstacle b;
+  b.center_m = Eigen::Vector2d(1.0, 2.0);
+  b.half_size_m = Eigen::Vector2d(0.5, 0.25);
+  b.yaw_rad = M_PI / 2;
+  const auto c = b.corners_m();
+  const Eigen::Vector2d expected[4] = {{1.25, 1.5}, {1.25, 2.5}, {0.75, 2.5}, {0.75, 1.5}};
+  double area2 = 0.0;  // shoelace: > 0 for counter-clockwise
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_NEAR((c[k] - expected[k]).norm(), 0.0, 1e-12) << k;
+    const auto& p = c[k];
+    const auto& q = c[(k + 1) % 4];
+    area2 += p.x() * q.y() - q.x() * p.y();
+  }
+  EXPECT_NEAR(area2 / 2, 0.5, 1e-12);
+}
+
+}  // namespace
+}  // namespace pepper::sim

@@ -179,13 +179,16 @@ async function main() {
       const painted = await page.evaluate(() => {
         const c = document.getElementById('topview');
         const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-        let blue = 0; let red = 0;
+        let blue = 0; let red = 0; let wall = 0;
         for (let i = 0; i < d.length; i += 4) {
           if (d[i + 2] > 200 && d[i] < 80) blue++;
           if (d[i] > 200 && d[i + 1] < 60 && d[i + 2] < 60) red++;  // #dc2626: driven blind
+          // #374151: the floor plan's walls
+          if (Math.abs(d[i] - 55) < 8 && Math.abs(d[i + 1] - 65) < 8 && Math.abs(d[i + 2] - 81) < 8) wall++;
         }
-        return { blue, red };
+        return { blue, red, wall };
       });
+      if (painted.wall < 100) throw new Error(`the floor plan's walls are not drawn (${painted.wall} px)`);
       if (painted.blue < 50) throw new Error(`taught path not drawn (${painted.blue} blue pixels)`);
       if (painted.red < 20) throw new Error(`the blind stretch is not drawn (${painted.red} red pixels)`);
       return file;

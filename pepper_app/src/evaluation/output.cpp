@@ -199,14 +199,11 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
       s.push_back({i == 0 ? "walls" : "", {w.a_m.x(), w.b_m.x()}, {w.a_m.y(), w.b_m.y()}, black, 2});
     }
     for (size_t i = 0; i < world.boxes.size(); ++i) {
-      const auto& b = world.boxes[i];
-      const double c = std::cos(b.yaw_rad), sn = std::sin(b.yaw_rad);
+      const auto corners = world.boxes[i].corners_m();
       report::Series r{i == 0 ? "furniture (taught)" : "", {}, {}, grey, 1};
-      for (int k = 0; k <= 4; ++k) {
-        const double sx = (k == 1 || k == 2) ? 1 : -1, sy = (k >= 2 && k <= 3) ? 1 : -1;
-        const double lx = sx * b.half_size_m.x(), ly = sy * b.half_size_m.y();
-        r.x.push_back(b.center_m.x() + c * lx - sn * ly);
-        r.y.push_back(b.center_m.y() + sn * lx + c * ly);
+      for (int k = 0; k <= 4; ++k) {  // closed outline
+        r.x.push_back(corners[static_cast<size_t>(k % 4)].x());
+        r.y.push_back(corners[static_cast<size_t>(k % 4)].y());
       }
       s.push_back(r);
     }

@@ -66,6 +66,19 @@ void check_intrinsics(const core::CameraIntrinsics& map_cam, const core::CameraI
   }
 }
 
+/// The UI's floor plan under the top view (simulated robot only: a real one has no world file):
+/// wall segments [ax, ay, bx, by] and furniture footprints as four corners, world frame, metres.
+nlohmann::json floor_plan_json(const sim::World& world) {
+  nlohmann::json walls = nlohmann::json::array(), boxes = nlohmann::json::array();
+  for (const auto& w : world.walls) walls.push_back({w.a_m.x(), w.a_m.y(), w.b_m.x(), w.b_m.y()});
+  for (const auto& b : world.boxes) {
+    nlohmann::json corners = nlohmann::json::array();
+    for (const auto& c : b.corners_m()) corners.push_back({c.x(), c.y()});
+    boxes.push_back(corners);
+  }
+  return {{"walls", walls}, {"boxes", boxes}};
+}
+
 /// The UI's replay.localisation: whether this frame's localisation attempt found the segment,
 /// and else the best candidate against the threshold.
 bool has_segment(const nav::Telemetry& t) {
@@ -237,6 +250,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       for (const auto& p : options.taught_keys_m) taught_keys.push_back({p.x(), p.y()});
       link.publish_state({{"taught_path", {{"taught", taught}, {"keys", taught_keys}}}});
     }
+    if (robot.mock && link.has_ui()) link.publish_state({{"floor_plan", floor_plan_json(robot.mock->world())}});
     auto next_iter = Clock::now();
     link.event({{"event", "replay_started"}, {"key_images", result.key_image_count}});
 

@@ -16,6 +16,7 @@
 // Thread-safety: a loaded World is immutable; share it as std::shared_ptr<const World>.
 
 #include <Eigen/Core>
+#include <array>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -80,6 +81,9 @@ struct BoxObstacle {
   Eigen::Vector2d half_size_m = Eigen::Vector2d::Zero();
   double yaw_rad = 0.0;
   std::string what;
+
+  /// The footprint's four corners in the world frame, counter-clockwise (for drawing).
+  std::array<Eigen::Vector2d, 4> corners_m() const;
 };
 
 /// A person-sized textured box walking a polyline at constant speed (ping-pong or loop).
