@@ -13,7 +13,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev
   clang libclang-rt-14-dev
-  chromium
+  chromium python3
 )
 # node and npm: this image may already ship them outside Debian's packaging (then Debian's npm
 # package conflicts); install Debian's only when the commands are missing.

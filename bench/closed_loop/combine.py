@@ -2,6 +2,7 @@
 """Combine `pepper_app evaluate --json` files (shards of one measurement) into one Markdown table.
 
 Usage: bench/closed_loop/combine.py SHARD.json [SHARD.json ...] [--out combined.json]
+                                    [--html index.html]
 
 One row per (world, features, controller, size, disturbances): success, the mean of the per-run
 lateral RMS and the largest per-run maximum over the runs that succeeded (cm), the longest
@@ -13,11 +14,28 @@ and `--run 4 5 6`) are merged run by run.
 Generated worlds (`gen_<kind>_<seed>`, from `pepper_app world generate`) get a second table, one
 row per disturbance over all of them, as issue 26 states its targets: success over all runs,
 lateral RMS on the successes, and every failure with its world seed and how it ended.
+
+Drift corrected at re-acquisition (issue 29): the distribution (median, max; cm and degrees) of
+the correction the odometry needed when vision came back after a stretch driven blind, over all
+runs.
+
+`--html FILE` writes one page with the whole matrix at a glance: the failed runs first, then a
+table per world (a row per disturbance) coloured against issue 26's targets (green: every run
+succeeded with lateral RMS <= 5 cm and max <= 15 cm; amber: all succeeded, accuracy over a
+target; red: a run failed), each row linked to that configuration's report and showing its top
+view when `evaluate --plots` wrote one beside the JSON (matrix.sh: DIR/NAME.json and DIR/NAME/).
 """
 import argparse
+import html
 import json
 import math
+import os
+import statistics
 import sys
+
+# Issue 26's targets per configuration.
+TARGET_RMS_M = 0.05
+TARGET_MAX_M = 0.15
 
 
 def key_of(e):
@@ -35,13 +53,18 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="+")
     ap.add_argument("--out", help="also write the merged evaluations as one JSON file")
+    ap.add_argument("--html", help="also write an HTML index of the matrix (see above)")
     a = ap.parse_args()
     merged = {}
+    reports = {}  # key -> the configuration's report folder (evaluate --plots), if any
     for f in a.files:
         with open(f) as fh:
             doc = json.load(fh)
+        plots = f[:-len(".json")] if f.endswith(".json") else None
         for e in doc["evaluations"]:
             k = key_of(e)
+            if plots and os.path.isfile(os.path.join(plots, "report.html")):
+                reports.setdefault(k, plots)
             if k not in merged:
                 merged[k] = dict(e, runs=[])
             known = {r["index"] for r in merged[k]["runs"]}
@@ -92,11 +115,109 @@ def main():
                   f"{fmt(sum(rms) / len(rms) if rms else None, 100)} / "
                   f"{fmt(max(rms) if rms else None, 100)} | "
                   f"{'; '.join(fails) if fails else 'none'} |")
+    drift = drift_summary(merged)
+    if drift:
+        print()
+        print(drift)
+    if a.html:
+        write_html(a.html, merged, reports, drift)
     if a.out:
         with open(a.out, "w") as fh:
             json.dump({"format": "pepper.evaluation", "version": 1,
                        "evaluations": list(merged.values())}, fh, indent=1)
     return 0
+
+
+def drift_summary(merged):
+    """One line: the corrections at re-acquisition over every run, or None if there were none."""
+    cm, deg = [], []
+    for e in merged.values():
+        for r in e["runs"]:
+            for q in r.get("reacquisitions") or []:
+                if q.get("corrected_m") is not None:
+                    cm.append(100.0 * q["corrected_m"])
+                if q.get("corrected_rad") is not None:
+                    deg.append(math.degrees(abs(q["corrected_rad"])))
+    if not cm:
+        return None
+    return (f"Drift corrected at re-acquisition ({len(cm)} re-acquisitions with a correction): "
+            f"median {statistics.median(cm):.1f} cm / {statistics.median(deg):.1f} deg, "
+            f"max {max(cm):.1f} cm / {max(deg):.1f} deg.")
+
+
+def row_stats(e):
+    runs = sorted(e["runs"], key=lambda r: r["index"])
+    ok = [r for r in runs if r["success"]]
+    rms = [r["lateral_rms_m"] for r in ok if r["lateral_rms_m"] is not None]
+    mx = [r["lateral_max_m"] for r in ok if r["lateral_max_m"] is not None]
+    mean_rms = sum(rms) / len(rms) if rms else None
+    worst = max(mx) if mx else None
+    if len(ok) < len(runs):
+        verdict = "fail"
+    elif (mean_rms is not None and mean_rms > TARGET_RMS_M) or (worst is not None and worst > TARGET_MAX_M):
+        verdict = "over"
+    else:
+        verdict = "ok"
+    return runs, ok, mean_rms, worst, verdict
+
+
+def write_html(path, merged, reports, drift):
+    base = os.path.dirname(os.path.abspath(path))
+
+    def link(k, text):
+        if k not in reports:
+            return html.escape(text)
+        href = os.path.relpath(os.path.join(reports[k], "report.html"), base)
+        return f'<a href="{html.escape(href)}">{html.escape(text)}</a>'
+
+    def thumb(k):
+        if k not in reports or not os.path.isfile(os.path.join(reports[k], "top_view.png")):
+            return ""
+        src = os.path.relpath(os.path.join(reports[k], "top_view.png"), base)
+        return f'<img src="{html.escape(src)}" alt="top view" loading="lazy">'
+
+    out = ["<!doctype html><meta charset='utf-8'><title>Closed-loop matrix</title><style>",
+           "body{font:14px sans-serif;margin:20px}table{border-collapse:collapse;margin:8px 0 24px}",
+           "td,th{border:1px solid #ccc;padding:4px 8px;vertical-align:top}",
+           ".ok{background:#dcfce7}.over{background:#fef3c7}.fail{background:#fee2e2}",
+           "img{width:220px}</style>",
+           "<h1>Closed-loop matrix</h1>",
+           f"<p>Targets (issue 26): every run succeeds, lateral RMS &le; {TARGET_RMS_M * 100:.0f} cm, "
+           f"max &le; {TARGET_MAX_M * 100:.0f} cm once converged. Green: met; amber: all runs "
+           "succeeded, accuracy over a target; red: a run failed.</p>"]
+    if drift:
+        out.append(f"<p>{html.escape(drift)}</p>")
+    fails = [(k, r) for k in sorted(merged) for r in sorted(merged[k]["runs"], key=lambda r: r["index"])
+             if not r["success"]]
+    out.append(f"<h2 id='failures'>Failed runs ({len(fails)})</h2>")
+    if fails:
+        out.append("<table><tr><th>world</th><th>disturbance</th><th>run</th><th>how it ended</th></tr>")
+        for k, r in fails:
+            out.append(f"<tr class='fail'><td>{link(k, k[0])}</td><td>{html.escape(k[4])}</td>"
+                       f"<td>{r['index'] + 1}</td><td>{html.escape(r['outcome'])} at "
+                       f"{r['travelled_m']:.1f} m {html.escape(r.get('detail') or '')}</td></tr>")
+        out.append("</table>")
+    else:
+        out.append("<p>none</p>")
+    worlds = {}
+    for k in merged:
+        worlds.setdefault(k[:4], []).append(k)
+    for w in sorted(worlds):
+        out.append(f"<h2>{html.escape(w[0])} <small>({html.escape(' / '.join(w[1:]))})</small></h2>")
+        out.append("<table><tr><th>disturbance</th><th>success</th><th>lateral RMS / max (cm)</th>"
+                   "<th>step ms (per-run medians)</th><th>top view</th></tr>")
+        for k in sorted(worlds[w], key=lambda k: k[4]):
+            runs, ok, mean_rms, worst, verdict = row_stats(merged[k])
+            steps = [r["step_ms_median"] for r in runs if r["step_ms_median"] is not None]
+            out.append(f"<tr class='{verdict}'><td>{link(k, k[4])}</td><td>{len(ok)}/{len(runs)}</td>"
+                       f"<td>{fmt(mean_rms, 100)} / {fmt(worst, 100)}</td>"
+                       f"<td>{fmt(min(steps)) if steps else '-'}-{fmt(max(steps)) if steps else '-'}</td>"
+                       f"<td>{thumb(k)}</td></tr>")
+        out.append("</table>")
+    tmp = path + ".tmp"
+    with open(tmp, "w") as fh:
+        fh.write("\n".join(out) + "\n")
+    os.replace(tmp, path)
 
 
 if __name__ == "__main__":

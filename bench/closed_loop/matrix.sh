@@ -9,6 +9,8 @@
 # configuration, two side by side (both cores); each configuration keeps its own JSON, so a
 # matrix can be run in shards across sessions and combined (bench/closed_loop/combine.py). A
 # configuration whose JSON exists is skipped, so the same command resumes an interrupted matrix.
+# Each configuration's plots and report (evaluate --plots) go to DIR/NAME/; combine.py --html
+# links them from one index page.
 #
 # Usage: bench/closed_loop/matrix.sh [--out DIR] [--app BIN] [--size WxH] [--starts N]
 #                                    [--gen-starts N] [--gen-seeds N]
@@ -21,7 +23,7 @@
 # Example (two sessions, each half of the matrix, then one table):
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 1/2
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 2/2
-#   bench/closed_loop/combine.py /work/eval/matrix/*.json
+#   bench/closed_loop/combine.py /work/eval/matrix/*.json --html /work/eval/matrix/index.html
 # Cost: about 1 to 3 minutes per run at VGA with two processes on a quiet 2-core machine
 # (7 x 4 x 10 = 280 shipped runs + 20 x 2 x 5 = 200 generated runs: several sessions).
 set -euo pipefail
@@ -48,7 +50,7 @@ while [[ $# -gt 0 ]]; do
     --shard) SHARD=$2; shift 2 ;;
     --only) ONLY=$2; shift 2 ;;
     --list) LIST=1; shift ;;
-    -h|--help) sed -n '2,26p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
     *) echo "matrix.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -104,11 +106,11 @@ run_one() {
   echo "$(date +%T) start $name"
   # shellcheck disable=SC2086
   "$APP" evaluate $args --seed 1 --size "$SIZE" --json "$OUT/$name.json.tmp" \
-      > "$OUT/$name.txt" 2> "$OUT/$name.log" || true
+      --plots "$OUT/$name" > "$OUT/$name.txt" 2> "$OUT/$name.log" || true
   if [[ -s $OUT/$name.json.tmp ]]; then mv "$OUT/$name.json.tmp" "$OUT/$name.json"; fi
   echo "$(date +%T) done  $name"
 }
 export -f run_one
 export OUT APP SIZE
 printf '%s\n' "${SELECTED[@]}" | xargs -d '\n' -P "$JOBS" -I{} bash -c 'run_one "$@"' _ {}
-echo "tables: bench/closed_loop/combine.py $OUT/*.json"
+echo "tables: bench/closed_loop/combine.py $OUT/*.json --html $OUT/index.html"

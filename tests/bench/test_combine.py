@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""bench/closed_loop/combine.py on two small evaluation shards: the Markdown table, the drift line
+and the HTML index (failures first, rows coloured against issue 26's targets, the report and top
+view linked when `evaluate --plots` wrote them beside the JSON)."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+COMBINE = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "closed_loop", "combine.py")
+
+
+def run(index, success, rms_m, max_m, corrected_m=None, outcome=None):
+    return {"index": index, "success": success, "outcome": outcome or ("complete" if success else "lost"),
+            "detail": "" if success else "no features", "travelled_m": 4.2,
+            "lateral_rms_m": rms_m, "lateral_max_m": max_m, "first_under_5cm_m": 1.0,
+            "step_ms_median": 12.0,
+            "reacquisitions": [{"blind_m": 0.5, "blind_rad": 0.3, "corrected_m": corrected_m,
+                                "corrected_rad": 0.02 if corrected_m is not None else None}]}
+
+
+def evaluation(world, disturbance, runs):
+    return {"format": "pepper.evaluation", "version": 1, "evaluations": [
+        {"world": world, "features": "lines+points", "controller": "vnhv", "size": "640x480",
+         "disturbances": [disturbance], "runs": runs}]}
+
+
+def main():
+    failures = []
+
+    def check(cond, what):
+        if not cond:
+            failures.append(what)
+
+    with tempfile.TemporaryDirectory() as d:
+        good = os.path.join(d, "room_none.json")
+        bad = os.path.join(d, "room_light0.6.json")
+        over = os.path.join(d, "hall_person.json")
+        with open(good, "w") as fh:
+            json.dump(evaluation("room", "none", [run(0, True, 0.01, 0.03, 0.04), run(1, True, 0.02, 0.05, 0.10)]), fh)
+        with open(bad, "w") as fh:
+            json.dump(evaluation("room", "light", [run(0, True, 0.01, 0.03), run(1, False, None, None)]), fh)
+        with open(over, "w") as fh:
+            json.dump(evaluation("hall", "person", [run(0, True, 0.08, 0.20)]), fh)
+        # The good configuration has its report beside it (matrix.sh: DIR/NAME/).
+        os.makedirs(os.path.join(d, "room_none"))
+        for name in ("report.html", "top_view.png"):
+            open(os.path.join(d, "room_none", name), "w").close()
+        index = os.path.join(d, "index.html")
+        r = subprocess.run([sys.executable, COMBINE, good, bad, over, "--html", index],
+                           capture_output=True, text=True)
+        check(r.returncode == 0, f"exit code {r.returncode}: {r.stderr}")
+        check("| room | none | 2/2 |" in r.stdout, "table row of room/none")
+        check("| room | light | 1/2 |" in r.stdout, "table row of room/light")
+        # Corrections 4 and 10 cm: median 7.0, max 10.0.
+        check("median 7.0 cm" in r.stdout and "max 10.0 cm" in r.stdout, "drift line: " + r.stdout[-300:])
+        page = open(index).read() if os.path.exists(index) else ""
+        check(page.index("Failed runs (1)") < page.index("<h2>hall") if "Failed runs (1)" in page and "<h2>hall" in page else False,
+              "the failures come first")
+        check("<tr class='fail'>" in page, "a red row for the failed configuration")
+        check("<tr class='over'>" in page, "an amber row for the configuration over the accuracy target")
+        check("<tr class='ok'><td><a href=\"room_none/report.html\">none</a>" in page, "a green row linking its report")
+        check('src="room_none/top_view.png"' in page, "the top view shown")
+    for f in failures:
+        print("FAIL", f)
+    print("ok" if not failures else f"{len(failures)} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
