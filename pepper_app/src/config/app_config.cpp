@@ -112,6 +112,7 @@ core::mapping::TeachOptions AppConfig::teach_options() const {
   t.extractor = extractor;
   t.matcher = matcher;
   t.matcher.klt = extractor.klt;  // tracking must use the key images' pyramid parameters
+  t.matcher.essential.camera_pitch_rad = robot.head_pitch_rad;  // the camera is the locked head's
   return t;
 }
 
@@ -120,6 +121,7 @@ core::navigator::NavigatorOptions AppConfig::navigator_options() const {
   n.extractor = extractor;
   n.matcher = matcher;
   n.matcher.klt = extractor.klt;
+  n.matcher.essential.camera_pitch_rad = robot.head_pitch_rad;
   return n;
 }
 

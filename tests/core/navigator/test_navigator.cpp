@@ -3,7 +3,10 @@
 // vanishing features hold the last command for hold_s of frame time, then stop with a reason.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
+#include <limits>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -512,7 +515,25 @@ struct ClosedLoopEnd {
   int switches = 0;
   int vnhv_frames = 0;  ///< frames with a VNHV deviation estimate
   double along_m = 0.0, lateral_m = 0.0, yaw_err_rad = 0.0;  ///< vs the taught final pose
+  /// Largest distance to the taught path from the turn on (after 2.5 m: the tour's first leg,
+  /// where the 10 cm start offset is driven out, is left out).
+  double max_off_path_m = 0.0;
+  double rms_off_path_m = 0.0;  ///< over the same frames
 };
+
+// Distance from (x, y) to the taught path's polyline.
+double distance_to_tour_path_m(double x_m, double y_m) {
+  const auto& path = tour().path;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const double ax = path[i].x_m, ay = path[i].y_m;
+    const double bx = path[i + 1].x_m - ax, by = path[i + 1].y_m - ay;
+    const double len2 = bx * bx + by * by;
+    const double u = len2 > 0 ? std::clamp(((x_m - ax) * bx + (y_m - ay) * by) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, std::hypot(x_m - ax - u * bx, y_m - ay - u * by));
+  }
+  return best;
+}
 
 ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
   Navigator nav(tour().map, options);
@@ -520,6 +541,8 @@ ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
   const double dt = 0.2;
   ClosedLoopEnd out;
   int last_in = 0;
+  double travelled_m = 0.0, sum_sq = 0.0;
+  int n_off = 0;
   for (int frames = 0; frames < 400; ++frames) {
     Frame f;
     f.gray = world().render(pose, camera());
@@ -546,7 +569,15 @@ ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
       pose.y_m -= v / w * (std::cos(pose.yaw_rad + w * dt) - std::cos(pose.yaw_rad));
     }
     pose.yaw_rad += w * dt;
+    travelled_m += std::abs(v) * dt;
+    if (travelled_m > 2.5) {
+      const double d = distance_to_tour_path_m(pose.x_m, pose.y_m);
+      out.max_off_path_m = std::max(out.max_off_path_m, d);
+      sum_sq += d * d;
+      ++n_off;
+    }
   }
+  out.rms_off_path_m = n_off > 0 ? std::sqrt(sum_sq / n_off) : 0.0;
   // Final pose against the taught end, in the end's heading frame.
   const test::Pose2d end = tour().path.back();
   const double dx = pose.x_m - end.x_m, dy = pose.y_m - end.y_m;
@@ -599,9 +630,12 @@ TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
 }
 
 // The default VNHV (VnhvOptions::max_arc_turn_rad = 1, Kp 9, Kd 6): straight segments on their
-// chord, the turning ones on their taught arc, curvature fed forward. Measured here: along -0.020 m,
-// lateral 0.008 m, yaw -0.006 rad, 168 frames with an estimate; with IBVS on the turning
-// segments (max_arc_turn_rad = 0) the end was 0.098 m off laterally, yaw -0.088 rad.
+// chord, the turning ones on their taught arc, curvature fed forward. "Helps" is judged on the
+// distance to the taught path from the turn on (RMS, the evaluation's measure), not on the one
+// final pose: with the five-point essential model (the default) the off-path RMS is 1.80 cm with
+// the arcs against 1.91 cm with IBVS on the turning segments (max_arc_turn_rad = 0), with the
+// planar model 1.57 against 1.79 cm, while the final lateral errors (2-10 mm) order the two
+// either way; the [ measured ] line prints both.
 TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
@@ -618,7 +652,11 @@ TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
   EXPECT_LT(std::abs(e.along_m), 0.30) << "along " << e.along_m;
   EXPECT_LT(std::abs(e.lateral_m), 0.05) << "lateral " << e.lateral_m;
   EXPECT_LT(std::abs(e.yaw_err_rad), 0.05);
-  EXPECT_LT(std::abs(e.lateral_m), std::abs(ibvs_turns.lateral_m)) << "the arcs did not help";
+  std::cout << "[ measured ] arcs: end lateral " << e.lateral_m << " m, max off path "
+            << e.max_off_path_m << " m, rms " << e.rms_off_path_m << " m; IBVS on the turns: "
+            << ibvs_turns.lateral_m << ", " << ibvs_turns.max_off_path_m << ", "
+            << ibvs_turns.rms_off_path_m << "\n";
+  EXPECT_LT(e.rms_off_path_m, ibvs_turns.rms_off_path_m) << "the arcs did not help";
 }
 
 }  // namespace
