@@ -1,6 +1,7 @@
 // ViSP camera XML through vpXmlParserCamera (values) and libxml2 (the file's structure); see
 // camera_xml.hpp.
 #include "visp_adapter/camera_xml.hpp"
+#include "visp_camera.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -210,12 +211,7 @@ void write_camera_xml(const std::string& path, const CameraCalibration& c) {
         }
     }
   }
-  vpCameraParameters cam;
-  if (c.model == CameraModel::kPerspectiveWithDistortion) {
-    cam.initPersProjWithDistortion(c.px, c.py, c.u0, c.v0, c.kud, c.kdu);
-  } else {
-    cam.initPersProjWithoutDistortion(c.px, c.py, c.u0, c.v0);
-  }
+  const vpCameraParameters cam = to_visp_camera(c);
   vpXmlParserCamera parser;
   const int rc = with_quiet_cout([&] {
     return parser.save(cam, path, c.name, static_cast<unsigned>(c.width_px), static_cast<unsigned>(c.height_px));

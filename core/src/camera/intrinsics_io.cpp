@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include <cstdlib>
+#include <cctype>
 
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
@@ -40,14 +40,6 @@ void require_valid(const std::string& path, const CameraIntrinsics& k) {
   throw IntrinsicsFileError(path, msg);
 }
 
-
-}  // namespace
-
-IntrinsicsFileError::IntrinsicsFileError(const std::string& path, const std::string& cause)
-    : std::runtime_error(path + ": " + cause), path_(path) {}
-
-namespace {
-
 visp_adapter::CameraModel to_adapter(ProjectionModel m) {
   return m == ProjectionModel::kWithDistortion ? visp_adapter::CameraModel::kPerspectiveWithDistortion
                                                : visp_adapter::CameraModel::kPerspectiveWithoutDistortion;
@@ -60,6 +52,9 @@ bool has_model(const visp_adapter::CameraEntry& e, ProjectionModel m) {
 }
 
 }  // namespace
+
+IntrinsicsFileError::IntrinsicsFileError(const std::string& path, const std::string& cause)
+    : std::runtime_error(path + ": " + cause), path_(path) {}
 
 CameraIntrinsics load_visp_camera_xml(const std::string& path, const std::string& camera_name,
                                       int width_px, int height_px,
