@@ -6,6 +6,8 @@
 // 1/z = (n . d) / c and (texcoord)/z are affine in (u, v): w = w0 + wx u + wy v, etc.
 #include "sim/renderer.hpp"
 
+#include "core/camera/distortion.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -300,6 +302,35 @@ struct Renderer::Impl {
   }
 };
 
+// The lens of a camera with ViSP's distortion model (core/camera/distortion.hpp): the rasteriser
+// has drawn the pinhole image; every output pixel takes it at the undistorted position of its own
+// centre (ViSP's pixel -> meter conversion, kdu), bilinearly for the radiance, nearest for the
+// depth. The lens acts before the sensor, so before exposure, vignetting, blur and noise. The maps
+// are rebuilt each frame (one multiply-add per pixel; a Renderer keeps no per-camera cache).
+void Renderer::distort_through_lens(const core::CameraIntrinsics& k, std::vector<float>& radiance,
+                                    std::vector<float>& inv_depth) const {
+  const int W = k.width_px, H = k.height_px;
+  cv::Mat map_x(H, W, CV_32FC1), map_y(H, W, CV_32FC1);
+  for (int y = 0; y < H; ++y) {
+    float* mx = map_x.ptr<float>(y);
+    float* my = map_y.ptr<float>(y);
+    for (int x = 0; x < W; ++x) {
+      const cv::Point2d pinhole_px = k.denormalize(core::camera::pixel_to_norm(k, {static_cast<double>(x), static_cast<double>(y)}));
+      mx[x] = static_cast<float>(pinhole_px.x);
+      my[x] = static_cast<float>(pinhole_px.y);
+    }
+  }
+  const cv::Mat rad(H, W, CV_32FC1, radiance.data());
+  const cv::Mat zb(H, W, CV_32FC1, inv_depth.data());
+  cv::Mat rad_out, zb_out;
+  // Outside the pinhole image (a lens with kud < 0 sees wider): the background, no surface.
+  cv::remap(rad, rad_out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+            cv::Scalar(options_.background_grey));
+  cv::remap(zb, zb_out, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0.0));
+  std::copy(rad_out.begin<float>(), rad_out.end<float>(), radiance.begin());
+  std::copy(zb_out.begin<float>(), zb_out.end<float>(), inv_depth.begin());
+}
+
 cv::Mat Renderer::render(const World& world, const ViewState& view) {
   cv::Mat out;
   render(world, view, out);
@@ -380,6 +411,7 @@ void Renderer::render(const World& world, const ViewState& view, cv::Mat& out) {
     for (const Prepared& p : floors) Impl::fill(p, W, rad, zb, options_.mipmaps, stats_);
   }
   for (const Prepared& p : normal) Impl::fill(p, W, rad, zb, options_.mipmaps, stats_);
+  if (k.model == core::ProjectionModel::kWithDistortion) distort_through_lens(k, radiance_, inv_depth_);
 
   // Exposure and vignetting, then 8 bits.
   out.create(H, W, CV_8UC1);

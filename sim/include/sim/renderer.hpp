@@ -13,6 +13,10 @@
 // Frames (docs/conventions.md): T_world_cam maps camera coordinates (x right, y down, z forward)
 // to the world (z up). Pixel centres are at integer coordinates, so a 3D point projects to
 // u_px = fx * X / Z + cx_px, v_px = fy * Y / Z + cy_px and lands in the pixel round(u_px, v_px).
+// Intrinsics with ViSP's distortion model (core/camera/intrinsics.hpp, e.g. Pepper's kud ~ 0.03)
+// render through the lens: the point lands at core::camera::norm_to_pixel(k, (X/Z, Y/Z)) instead
+// (the pinhole image resampled before exposure; within a fraction of a pixel, kud and kdu being
+// two fits of one lens).
 // Determinism: the output depends only on the world, the view and the options; the noise is drawn
 // from a generator seeded with (noise_seed, frame_index). Rendering is single-threaded.
 // Thread-safety: a Renderer owns scratch buffers: one renderer per thread.
@@ -75,6 +79,8 @@ class Renderer {
   const RenderStats& last_stats() const { return stats_; }
 
  private:
+  void distort_through_lens(const core::CameraIntrinsics& k, std::vector<float>& radiance,
+                            std::vector<float>& inv_depth) const;
   struct Impl;
   RenderOptions options_;
   RenderStats stats_;
