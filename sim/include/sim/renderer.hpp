@@ -79,14 +79,17 @@ class Renderer {
   const RenderStats& last_stats() const { return stats_; }
 
  private:
-  void distort_through_lens(const core::CameraIntrinsics& k, std::vector<float>& radiance,
-                            std::vector<float>& inv_depth) const;
+  void distort_through_lens(const core::CameraIntrinsics& k);
   struct Impl;
   RenderOptions options_;
   RenderStats stats_;
   std::vector<float> radiance_;   // grey levels before exposure
   std::vector<float> inv_depth_;  // 1 / z_cam, 0 = nothing
   std::vector<float> gain_map_;   // vignetting, per pixel
+  // Lens (distortion model only): the pinhole pixel each output pixel samples, for lens_for_.
+  core::CameraIntrinsics lens_for_;
+  cv::Mat lens_map_x_, lens_map_y_;
+  std::vector<float> lens_scratch_;
   int width_px_ = 0;
   int height_px_ = 0;
   std::vector<int16_t> noise_table_;
