@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
-  libopencv-dev libopencv-contrib-dev libeigen3-dev libvisp-dev visp-images-data
+  libopencv-dev libopencv-contrib-dev libeigen3-dev libvisp-dev libxml2-dev visp-images-data
   libboost-dev libboost-system-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev

@@ -6,6 +6,8 @@
 // 1/z = (n . d) / c and (texcoord)/z are affine in (u, v): w = w0 + wx u + wy v, etc.
 #include "sim/renderer.hpp"
 
+#include "core/camera/distortion.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -300,6 +302,41 @@ struct Renderer::Impl {
   }
 };
 
+// The lens of a camera with ViSP's distortion model (core/camera/distortion.hpp): the rasteriser
+// has drawn the pinhole image; every output pixel takes it at the undistorted position of its own
+// centre (ViSP's pixel -> meter conversion, kdu), bilinearly for the radiance, nearest for the
+// depth. The lens acts before the sensor, so before exposure, vignetting, blur and noise. The maps
+// are kept for the last camera (built again when the intrinsics change).
+void Renderer::distort_through_lens(const core::CameraIntrinsics& k) {
+  const int W = k.width_px, H = k.height_px;
+  if (!(lens_for_ == k) || lens_map_x_.empty()) {
+    lens_map_x_.create(H, W, CV_32FC1);
+    lens_map_y_.create(H, W, CV_32FC1);
+    for (int y = 0; y < H; ++y) {
+      float* mx = lens_map_x_.ptr<float>(y);
+      float* my = lens_map_y_.ptr<float>(y);
+      for (int x = 0; x < W; ++x) {
+        const cv::Point2d pinhole_px = k.denormalize(
+            core::camera::pixel_to_norm(k, {static_cast<double>(x), static_cast<double>(y)}));
+        mx[x] = static_cast<float>(pinhole_px.x);
+        my[x] = static_cast<float>(pinhole_px.y);
+      }
+    }
+    lens_for_ = k;
+  }
+  lens_scratch_.resize(radiance_.size());
+  // Outside the pinhole image (a lens with kud < 0 sees wider): the background, no surface.
+  // Each remap writes into the scratch buffer, which then swaps with the buffer it replaces.
+  auto through_lens = [&](std::vector<float>& buffer, int interpolation, double outside) {
+    cv::Mat out(H, W, CV_32FC1, lens_scratch_.data());
+    cv::remap(cv::Mat(H, W, CV_32FC1, buffer.data()), out, lens_map_x_, lens_map_y_, interpolation,
+              cv::BORDER_CONSTANT, cv::Scalar(outside));
+    buffer.swap(lens_scratch_);
+  };
+  through_lens(radiance_, cv::INTER_LINEAR, options_.background_grey);
+  through_lens(inv_depth_, cv::INTER_NEAREST, 0.0);
+}
+
 cv::Mat Renderer::render(const World& world, const ViewState& view) {
   cv::Mat out;
   render(world, view, out);
@@ -380,6 +417,11 @@ void Renderer::render(const World& world, const ViewState& view, cv::Mat& out) {
     for (const Prepared& p : floors) Impl::fill(p, W, rad, zb, options_.mipmaps, stats_);
   }
   for (const Prepared& p : normal) Impl::fill(p, W, rad, zb, options_.mipmaps, stats_);
+  if (k.model == core::ProjectionModel::kWithDistortion) {
+    distort_through_lens(k);  // swaps the buffers: take their pointers again
+    rad = radiance_.data();
+    zb = inv_depth_.data();
+  }
 
   // Exposure and vignetting, then 8 bits.
   out.create(H, W, CV_8UC1);

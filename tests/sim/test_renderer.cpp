@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/camera/distortion.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/renderer.hpp"
 #include "sim/world.hpp"
@@ -100,6 +101,37 @@ TEST(Renderer, SquareCentroidLandsOnProjectedPixel) {
       if (p.y() > 0) {
         EXPECT_LT(c.x, view.intrinsics.cx_px);
       }
+    }
+  }
+}
+
+// Intrinsics with ViSP's distortion model render through the lens (issue 31): a square near the
+// image corner lands where ViSP's meter -> pixel conversion (kud) puts it, several pixels from
+// its pinhole projection; at the centre nothing moves.
+TEST(Renderer, DistortionModelMovesPointsWhereViSPsModelPutsThem) {
+  const double h = 1.2;
+  const Eigen::Isometry3d T_world_cam = camera_looking_along_x(h);
+  core::CameraIntrinsics k = core::CameraIntrinsics::pepper_top_vga();
+  k.model = core::ProjectionModel::kWithDistortion;
+  k.kud = 0.03;  // Pepper's top camera (PEPPER.md)
+  k.kdu = -0.029;
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(3.0, 1.5, 2.2), Eigen::Vector3d(3.0, -1.4, 0.25),
+                                   Eigen::Vector3d(4.0, 0.0, h)}) {
+    const World w = square_world(p, 0.12);
+    Renderer r(clean_options());
+    ViewState view;
+    view.T_world_cam = T_world_cam;
+    view.intrinsics = k;
+    const cv::Mat img = r.render(w, view);
+    const Eigen::Vector3d pc = T_world_cam.inverse() * p;
+    const cv::Point2d n{pc.x() / pc.z(), pc.y() / pc.z()};
+    const cv::Point2d lens = core::camera::norm_to_pixel(k, n);
+    const cv::Point2d pinhole = k.denormalize(n);
+    const cv::Point2d c = bright_centroid(img, 150);
+    EXPECT_NEAR(c.x, lens.x, 1.0) << "point " << p.transpose();
+    EXPECT_NEAR(c.y, lens.y, 1.0) << "point " << p.transpose();
+    if (std::hypot(n.x, n.y) > 0.5) {
+      EXPECT_GT(std::hypot(c.x - pinhole.x, c.y - pinhole.y), 2.5) << "point " << p.transpose();
     }
   }
 }

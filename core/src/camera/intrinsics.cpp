@@ -5,6 +5,23 @@
 
 namespace pepper::core {
 
+const char* to_string(ProjectionModel model) {
+  switch (model) {
+    case ProjectionModel::kWithoutDistortion:
+      return "perspectiveProjWithoutDistortion";
+    case ProjectionModel::kWithDistortion:
+      return "perspectiveProjWithDistortion";
+  }
+  return "unknown";
+}
+
+std::optional<ProjectionModel> projection_model_from_string(const std::string& name) {
+  for (const ProjectionModel m : {ProjectionModel::kWithoutDistortion, ProjectionModel::kWithDistortion}) {
+    if (name == to_string(m)) return m;
+  }
+  return std::nullopt;
+}
+
 CameraIntrinsics CameraIntrinsics::pepper_top_vga() {
   // QVGA calibration (PEPPER.md, qcr/pepper_navigation camera.xml) scaled to VGA.
   CameraIntrinsics qvga;
@@ -53,6 +70,14 @@ std::vector<std::string> CameraIntrinsics::validate() const {
   positive("fy_px", fy_px);
   finite("cx_px", cx_px);
   finite("cy_px", cy_px);
+  finite("kud", kud);
+  finite("kdu", kdu);
+  if (model == ProjectionModel::kWithoutDistortion && (kud != 0.0 || kdu != 0.0)) {
+    std::ostringstream os;
+    os << "kud = " << kud << ", kdu = " << kdu << " must be 0 for model "
+       << to_string(ProjectionModel::kWithoutDistortion);
+    errors.push_back(os.str());
+  }
   return errors;
 }
 

@@ -1,4 +1,5 @@
-// Intrinsics files: ViSP camera XML and the plain YAML/JSON form (see intrinsics_io.hpp).
+// Intrinsics files: ViSP camera XML (through visp_adapter, i.e. ViSP's vpXmlParserCamera) and the
+// plain YAML/JSON form (see intrinsics_io.hpp).
 #include "core/camera/intrinsics_io.hpp"
 #include "core/camera/intrinsics_json.hpp"
 
@@ -6,10 +7,12 @@
 #include <fstream>
 #include <sstream>
 
-#include <cstdlib>
+#include <cctype>
 
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
+
+#include "visp_adapter/camera_xml.hpp"
 
 namespace pepper::core::camera {
 namespace {
@@ -37,104 +40,15 @@ void require_valid(const std::string& path, const CameraIntrinsics& k) {
   throw IntrinsicsFileError(path, msg);
 }
 
-
-// Minimal XML reader for ViSP's camera files: elements, text, comments, declarations; attributes
-// are skipped. ViSP 3.5's own headers (vpXmlParserCamera) do not compile as C++20 under GCC 12
-// (vpArray2D's `vpArray2D<Type>()` constructor declarations, DR 2237), so we read the
-// format ourselves; the format is ViSP's (see intrinsics_io.hpp).
-struct XmlNode {
-  std::string name;
-  std::string text;
-  std::vector<XmlNode> children;
-  const XmlNode* child(const std::string& n) const {
-    for (const auto& c : children)
-      if (c.name == n) return &c;
-    return nullptr;
-  }
-};
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
+visp_adapter::CameraModel to_adapter(ProjectionModel m) {
+  return m == ProjectionModel::kWithDistortion ? visp_adapter::CameraModel::kPerspectiveWithDistortion
+                                               : visp_adapter::CameraModel::kPerspectiveWithoutDistortion;
 }
 
-XmlNode parse_xml(const std::string& doc) {
-  XmlNode root;
-  root.name = "#document";
-  std::vector<XmlNode*> stack{&root};
-  size_t i = 0;
-  while (i < doc.size()) {
-    if (doc[i] != '<') {
-      const size_t lt = doc.find('<', i);
-      const size_t stop = lt == std::string::npos ? doc.size() : lt;
-      stack.back()->text += doc.substr(i, stop - i);
-      i = stop;
-      continue;
-    }
-    if (doc.compare(i, 4, "<!--") == 0) {
-      const size_t e = doc.find("-->", i + 4);
-      if (e == std::string::npos) throw std::runtime_error("unterminated comment");
-      i = e + 3;
-      continue;
-    }
-    if (doc.compare(i, 2, "<?") == 0 || doc.compare(i, 2, "<!") == 0) {
-      const size_t e = doc.find('>', i);
-      if (e == std::string::npos) throw std::runtime_error("unterminated declaration");
-      i = e + 1;
-      continue;
-    }
-    const size_t gt = doc.find('>', i);
-    if (gt == std::string::npos) throw std::runtime_error("unterminated tag");
-    std::string tag = doc.substr(i + 1, gt - i - 1);
-    i = gt + 1;
-    if (!tag.empty() && tag[0] == '/') {
-      const std::string name = trim(tag.substr(1));
-      if (stack.size() < 2 || stack.back()->name != name) {
-        throw std::runtime_error("unexpected closing tag </" + name + ">");
-      }
-      stack.pop_back();
-      continue;
-    }
-    const bool self_closing = !tag.empty() && tag.back() == '/';
-    if (self_closing) tag.pop_back();
-    const size_t sp = tag.find_first_of(" \t\r\n");
-    XmlNode node;
-    node.name = trim(tag.substr(0, sp));
-    if (node.name.empty()) throw std::runtime_error("empty tag name");
-    stack.back()->children.push_back(std::move(node));
-    if (!self_closing) stack.push_back(&stack.back()->children.back());
-  }
-  if (stack.size() != 1) throw std::runtime_error("unclosed element <" + stack.back()->name + ">");
-  return root;
-}
-
-void collect(const XmlNode& n, const std::string& name, std::vector<const XmlNode*>& out) {
-  for (const auto& c : n.children) {
-    if (c.name == name) out.push_back(&c);
-    else collect(c, name, out);
-  }
-}
-
-double parse_number(const std::string& path, const std::string& what, const std::string& text) {
-  const std::string t = trim(text);
-  char* end = nullptr;
-  const double v = std::strtod(t.c_str(), &end);
-  if (t.empty() || end != t.c_str() + t.size()) {
-    throw IntrinsicsFileError(path, "<" + what + "> is not a number: '" + t + "'");
-  }
-  return v;
-}
-
-double number(const std::string& path, const XmlNode& parent, const std::string& name) {
-  const XmlNode* n = parent.child(name);
-  if (!n) throw IntrinsicsFileError(path, "missing <" + name + "> in <" + parent.name + ">");
-  return parse_number(path, name, n->text);
-}
-
-double number_or(const std::string& path, const XmlNode* n, double fallback) {
-  return n ? parse_number(path, n->name, n->text) : fallback;
+bool has_model(const visp_adapter::CameraEntry& e, ProjectionModel m) {
+  for (const visp_adapter::CameraModel held : e.models)
+    if (held == to_adapter(m)) return true;
+  return false;
 }
 
 }  // namespace
@@ -143,62 +57,86 @@ IntrinsicsFileError::IntrinsicsFileError(const std::string& path, const std::str
     : std::runtime_error(path + ": " + cause), path_(path) {}
 
 CameraIntrinsics load_visp_camera_xml(const std::string& path, const std::string& camera_name,
-                                      int width_px, int height_px) {
-  require_readable(path);
+                                      int width_px, int height_px,
+                                      std::optional<ProjectionModel> model) {
   if (width_px < 0 || height_px < 0) {
     throw IntrinsicsFileError(path, "requested image size must be >= 0");
   }
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  XmlNode root;
   try {
-    root = parse_xml(buf.str());
-  } catch (const std::runtime_error& e) {
-    throw IntrinsicsFileError(path, std::string("not a well-formed XML file: ") + e.what());
-  }
-  // ViSP files: <root><camera>...</camera>...</root>; accept <camera> at any depth.
-  std::vector<const XmlNode*> cameras;
-  collect(root, "camera", cameras);
-  if (cameras.empty()) throw IntrinsicsFileError(path, "no <camera> element (not a ViSP camera XML?)");
-  bool saw_name = false;
-  for (const XmlNode* cam : cameras) {
-    const XmlNode* name = cam->child("name");
-    const std::string cam_name = name ? trim(name->text) : std::string();
-    if (!camera_name.empty() && cam_name != camera_name) continue;
-    saw_name = true;
-    const int w = static_cast<int>(number_or(path, cam->child("image_width"), 0.0));
-    const int h = static_cast<int>(number_or(path, cam->child("image_height"), 0.0));
-    if (width_px > 0 && height_px > 0 && (w != width_px || h != height_px)) continue;
-    for (const XmlNode& model : cam->children) {
-      if (model.name != "model") continue;
-      const XmlNode* type = model.child("type");
-      if (!type || trim(type->text) != "perspectiveProjWithoutDistortion") continue;
+    // The camera: the first whose name and image size match the request (a camera without a
+    // size matches any); ViSP's parser needs its name, so the file's cameras are listed first.
+    const std::vector<visp_adapter::CameraEntry> entries = visp_adapter::list_camera_xml(path);
+    const bool size_requested = width_px > 0 && height_px > 0;
+    bool saw_name = false;
+    for (const visp_adapter::CameraEntry& e : entries) {
+      if (!camera_name.empty() && e.name != camera_name) continue;
+      saw_name = true;
+      const bool sized = e.width_px > 0 && e.height_px > 0;
+      if (size_requested && sized && (e.width_px != width_px || e.height_px != height_px)) continue;
+      // The model: the one asked for; else the pinhole model when the camera has it, since the
+      // features are not undistorted yet (intrinsics.hpp); else the model with distortion.
+      ProjectionModel chosen = ProjectionModel::kWithoutDistortion;
+      if (model) {
+        chosen = *model;
+      } else if (!has_model(e, ProjectionModel::kWithoutDistortion)) {
+        chosen = ProjectionModel::kWithDistortion;
+      }
+      if (!has_model(e, chosen)) continue;
+      const visp_adapter::CameraCalibration c =
+          visp_adapter::read_camera_xml(path, e.name, to_adapter(chosen), e.width_px, e.height_px);
       CameraIntrinsics k;
-      k.width_px = width_px > 0 ? width_px : w;
-      k.height_px = height_px > 0 ? height_px : h;
-      k.fx_px = number(path, model, "px");
-      k.fy_px = number(path, model, "py");
-      k.cx_px = number(path, model, "u0");
-      k.cy_px = number(path, model, "v0");
+      k.width_px = size_requested ? width_px : c.width_px;
+      k.height_px = size_requested ? height_px : c.height_px;
+      k.fx_px = c.px;
+      k.fy_px = c.py;
+      k.cx_px = c.u0;
+      k.cy_px = c.v0;
+      k.model = chosen;
+      k.kud = c.kud;
+      k.kdu = c.kdu;
       if (k.width_px <= 0 || k.height_px <= 0) {
-        throw IntrinsicsFileError(path, "camera '" + cam_name +
+        throw IntrinsicsFileError(path, "camera '" + e.name +
                                             "' has no <image_width>/<image_height> and none was requested");
       }
       require_valid(path, k);
       return k;
     }
+    std::ostringstream os;
+    if (!saw_name) {
+      os << "no camera named '" << camera_name << "'";
+    } else {
+      os << "no camera";
+      if (!camera_name.empty()) os << " '" << camera_name << "'";
+      if (size_requested) os << " of image size " << width_px << "x" << height_px;
+      os << " has a <model> of type "
+         << (model ? to_string(*model)
+                   : "perspectiveProjWithoutDistortion or perspectiveProjWithDistortion");
+    }
+    throw IntrinsicsFileError(path, os.str());
+  } catch (const visp_adapter::CameraXmlError& e) {
+    throw IntrinsicsFileError(path, e.cause());
   }
-  std::ostringstream os;
-  if (!saw_name) {
-    os << "no camera named '" << camera_name << "'";
-  } else {
-    os << "no camera";
-    if (!camera_name.empty()) os << " '" << camera_name << "'";
-    if (width_px > 0) os << " with image size " << width_px << "x" << height_px;
-    os << " has a <model> of type perspectiveProjWithoutDistortion";
+}
+
+void save_visp_camera_xml(const CameraIntrinsics& k, const std::string& path,
+                          const std::string& camera_name) {
+  require_valid(path, k);
+  visp_adapter::CameraCalibration c;
+  c.name = camera_name;
+  c.width_px = k.width_px;
+  c.height_px = k.height_px;
+  c.model = to_adapter(k.model);
+  c.px = k.fx_px;
+  c.py = k.fy_px;
+  c.u0 = k.cx_px;
+  c.v0 = k.cy_px;
+  c.kud = k.kud;
+  c.kdu = k.kdu;
+  try {
+    visp_adapter::write_camera_xml(path, c);
+  } catch (const visp_adapter::CameraXmlError& e) {
+    throw IntrinsicsFileError(path, e.cause());
   }
-  throw IntrinsicsFileError(path, os.str());
 }
 
 CameraIntrinsics load_intrinsics_plain(const std::string& path) {
@@ -254,6 +192,11 @@ void save_intrinsics_plain(const CameraIntrinsics& k, const std::string& path) {
   std::ostringstream os;
   os.precision(17);
   if (ext == ".yaml" || ext == ".yml") {
+    // The YAML form is the pinhole only: writing a model with distortion there would lose it.
+    if (k.model != ProjectionModel::kWithoutDistortion) {
+      throw IntrinsicsFileError(path, std::string("the YAML form holds no distortion (model ") +
+                                          to_string(k.model) + "): write .json or ViSP .xml");
+    }
     os << "width_px: " << k.width_px << "\nheight_px: " << k.height_px << "\nfx_px: " << k.fx_px
        << "\nfy_px: " << k.fy_px << "\ncx_px: " << k.cx_px << "\ncy_px: " << k.cy_px << "\n";
   } else {

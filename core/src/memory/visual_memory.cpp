@@ -385,6 +385,18 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
   if (options.expected_camera) {
     const CameraIntrinsics expected =
         options.expected_camera->scaled_to(m.camera.width_px, m.camera.height_px);
+    // The projection model first: features taught through one model do not compare with features
+    // seen through another (a map written before the model was recorded is without distortion).
+    auto close = [](double x, double y) { return std::abs(x - y) <= 1e-9 + 1e-6 * std::abs(y); };
+    if (m.camera.model != expected.model || !close(m.camera.kud, expected.kud) ||
+        !close(m.camera.kdu, expected.kdu)) {
+      std::ostringstream os;
+      os << (dir / kManifestName).string() << ": map taught with camera model "
+         << to_string(m.camera.model) << " (kud " << m.camera.kud << ", kdu " << m.camera.kdu
+         << "), the camera is " << to_string(expected.model) << " (kud " << expected.kud
+         << ", kdu " << expected.kdu << ")";
+      throw MapError(Kind::kIntrinsicsMismatch, dir / kManifestName, os.str());
+    }
     if (!same_camera(m.camera, expected)) {
       std::ostringstream os;
       os << (dir / kManifestName).string() << ": map camera fx " << m.camera.fx_px << " fy "
@@ -464,8 +476,12 @@ std::string MapSummary::to_text() const {
      << "taught duration: " << std::fixed << std::setprecision(1) << taught_duration_s << " s"
      << " (frames " << first_frame_index << ".." << last_frame_index << ")\n"
      << "camera: " << camera.width_px << "x" << camera.height_px << " fx " << std::setprecision(2)
-     << camera.fx_px << " fy " << camera.fy_px << " cx " << camera.cx_px << " cy " << camera.cy_px
-     << "\n";
+     << camera.fx_px << " fy " << camera.fy_px << " cx " << camera.cx_px << " cy " << camera.cy_px;
+  if (camera.model != ProjectionModel::kWithoutDistortion) {
+    os << " " << to_string(camera.model) << " kud " << std::setprecision(4) << camera.kud << " kdu "
+       << camera.kdu;
+  }
+  os << "\n";
   if (!key_images.empty()) {
     const double driven_m = key_images.back().travelled_m - key_images.front().travelled_m;
     os << "driven: ";

@@ -13,6 +13,10 @@
 // Frames (docs/conventions.md): T_world_cam maps camera coordinates (x right, y down, z forward)
 // to the world (z up). Pixel centres are at integer coordinates, so a 3D point projects to
 // u_px = fx * X / Z + cx_px, v_px = fy * Y / Z + cy_px and lands in the pixel round(u_px, v_px).
+// Intrinsics with ViSP's distortion model (core/camera/intrinsics.hpp, e.g. Pepper's kud ~ 0.03)
+// render through the lens: the point lands at core::camera::norm_to_pixel(k, (X/Z, Y/Z)) instead
+// (the pinhole image resampled before exposure; within a fraction of a pixel, kud and kdu being
+// two fits of one lens).
 // Determinism: the output depends only on the world, the view and the options; the noise is drawn
 // from a generator seeded with (noise_seed, frame_index). Rendering is single-threaded.
 // Thread-safety: a Renderer owns scratch buffers: one renderer per thread.
@@ -75,12 +79,17 @@ class Renderer {
   const RenderStats& last_stats() const { return stats_; }
 
  private:
+  void distort_through_lens(const core::CameraIntrinsics& k);
   struct Impl;
   RenderOptions options_;
   RenderStats stats_;
   std::vector<float> radiance_;   // grey levels before exposure
   std::vector<float> inv_depth_;  // 1 / z_cam, 0 = nothing
   std::vector<float> gain_map_;   // vignetting, per pixel
+  // Lens (distortion model only): the pinhole pixel each output pixel samples, for lens_for_.
+  core::CameraIntrinsics lens_for_;
+  cv::Mat lens_map_x_, lens_map_y_;
+  std::vector<float> lens_scratch_;
   int width_px_ = 0;
   int height_px_ = 0;
   std::vector<int16_t> noise_table_;

@@ -24,7 +24,7 @@ TEST(IntrinsicsIo, VispXmlFirstCameraWithoutDistortion) {
   const CameraIntrinsics k = load_visp_camera_xml(kXml);
   EXPECT_EQ(k.width_px, 320);
   EXPECT_EQ(k.height_px, 240);
-  EXPECT_DOUBLE_EQ(k.fx_px, 298.13);  // the distortion model of the same camera is skipped
+  EXPECT_DOUBLE_EQ(k.fx_px, 298.13);  // no model asked: the pinhole one
   EXPECT_DOUBLE_EQ(k.fy_px, 298.72);
   EXPECT_DOUBLE_EQ(k.cx_px, 159.15);
   EXPECT_DOUBLE_EQ(k.cy_px, 118.91);
@@ -74,7 +74,7 @@ TEST(IntrinsicsIo, ErrorsNameTheFile) {
     load_visp_camera_xml(bad_number);
     FAIL();
   } catch (const IntrinsicsFileError& e) {
-    EXPECT_NE(std::string(e.what()).find("px"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("<px> is not a number: 'abc'"), std::string::npos) << e.what();
   }
   const std::string negative = temp_file(
       "negative.xml",
@@ -86,6 +86,99 @@ TEST(IntrinsicsIo, ErrorsNameTheFile) {
     FAIL();
   } catch (const IntrinsicsFileError& e) {
     EXPECT_NE(std::string(e.what()).find("fx_px"), std::string::npos);
+  }
+}
+
+// Written by ViSP 3.5's own vpXmlParserCamera::save (Debian libvisp-core3.5), camera "CameraTop"
+// at 320x240: first initPersProjWithDistortion(298.1, 298.7, 159.1, 118.9, kud 0.031,
+// kdu -0.0302), then initPersProjWithoutDistortion(298.1, 298.7, 159.1, 118.9) into the same file.
+const std::string kVispWritten =
+    std::string(PEPPER_SOURCE_DIR) + "/tests/core/camera/data/visp_written_with_distortion.xml";
+
+TEST(IntrinsicsIo, FileWrittenByViSPWithDistortion) {
+  const CameraIntrinsics d =
+      load_visp_camera_xml(kVispWritten, "CameraTop", 0, 0, ProjectionModel::kWithDistortion);
+  EXPECT_EQ(d.model, ProjectionModel::kWithDistortion);
+  EXPECT_EQ(d.width_px, 320);
+  EXPECT_EQ(d.height_px, 240);
+  EXPECT_DOUBLE_EQ(d.fx_px, 298.1);
+  EXPECT_DOUBLE_EQ(d.fy_px, 298.7);
+  EXPECT_DOUBLE_EQ(d.cx_px, 159.1);
+  EXPECT_DOUBLE_EQ(d.cy_px, 118.9);
+  EXPECT_DOUBLE_EQ(d.kud, 0.031);
+  EXPECT_DOUBLE_EQ(d.kdu, -0.0302);
+  // No model asked: the pinhole one, which is what the features use (intrinsics_io.hpp).
+  const CameraIntrinsics p = load_intrinsics(kVispWritten);
+  EXPECT_EQ(p.model, ProjectionModel::kWithoutDistortion);
+  EXPECT_EQ(p.kud, 0.0);
+  EXPECT_DOUBLE_EQ(p.fx_px, 298.1);
+}
+
+TEST(IntrinsicsIo, BothModelsRoundTripThroughViSP) {
+  const std::string path = temp_file("round_trip.xml", "");
+  std::filesystem::remove(path);  // ViSP adds to an existing file; start from none
+  CameraIntrinsics with = CameraIntrinsics::pepper_top_vga();
+  with.model = ProjectionModel::kWithDistortion;
+  with.kud = 0.0297;
+  with.kdu = -0.0288;
+  with.fx_px = 595.5;  // a distortion fit has its own focal lengths
+  const CameraIntrinsics without = CameraIntrinsics::pepper_top_vga();
+  save_visp_camera_xml(with, path, "CameraTop");
+  save_visp_camera_xml(without, path, "CameraTop");
+  EXPECT_EQ(load_visp_camera_xml(path, "CameraTop", 640, 480, ProjectionModel::kWithDistortion), with);
+  EXPECT_EQ(load_visp_camera_xml(path, "CameraTop", 640, 480, ProjectionModel::kWithoutDistortion),
+            without);
+  EXPECT_EQ(load_visp_camera_xml(path), without);
+  // ViSP does not overwrite a model: say so rather than keep the old values silently.
+  try {
+    save_visp_camera_xml(with, path, "CameraTop");
+    FAIL() << "second write of the same model accepted";
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("already holds"), std::string::npos) << e.what();
+  }
+  // A file with only the distortion model: read, and recorded as such.
+  const std::string only = temp_file("only_distortion.xml", "");
+  std::filesystem::remove(only);
+  save_visp_camera_xml(with, only, "CameraTop");
+  EXPECT_EQ(load_intrinsics(only), with);
+}
+
+TEST(IntrinsicsIo, ShippedPepperCalibrationLoadsAtBothSizes) {
+  const std::string shipped = std::string(PEPPER_SOURCE_DIR) + "/cameras/pepper_top.xml";
+  const CameraIntrinsics vga = load_visp_camera_xml(shipped, "CameraTop", 640, 480);
+  EXPECT_EQ(vga, CameraIntrinsics::pepper_top_vga());
+  const CameraIntrinsics qvga = load_visp_camera_xml(shipped, "CameraTop", 320, 240);
+  EXPECT_DOUBLE_EQ(qvga.fx_px, 298.13);
+  EXPECT_DOUBLE_EQ(qvga.cy_px, 118.91);
+  EXPECT_EQ(load_intrinsics(shipped), qvga);  // the first camera of the file
+}
+
+TEST(IntrinsicsIo, MalformedXmlNamesTheFileAndTheCause) {
+  const std::string broken = temp_file(
+      "broken.xml", "<root>\n<camera><name>CameraTop</name>\n<model><px>3</model></camera></root>\n");
+  try {
+    load_intrinsics(broken);
+    FAIL() << "malformed XML accepted";
+  } catch (const IntrinsicsFileError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(broken, 0), 0u) << what;  // starts with the path
+    EXPECT_NE(what.find("not a well-formed XML file"), std::string::npos) << what;
+    EXPECT_NE(what.find("line 3"), std::string::npos) << what;
+  }
+  const std::string not_visp = temp_file("not_visp.xml", "<opencv_storage><a>1</a></opencv_storage>");
+  try {
+    load_intrinsics(not_visp);
+    FAIL() << "non-ViSP XML accepted";
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find(not_visp), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("<root>"), std::string::npos) << e.what();
+  }
+  try {
+    load_visp_camera_xml(kXml, "bottom", 0, 0, ProjectionModel::kWithDistortion);
+    FAIL() << "missing model accepted";
+  } catch (const IntrinsicsFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("perspectiveProjWithDistortion"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(kXml), std::string::npos) << e.what();
   }
 }
 

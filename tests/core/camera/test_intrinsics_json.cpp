@@ -39,5 +39,34 @@ TEST(IntrinsicsJson, MissingOrBadKeysAndInvalidValuesAreNamed) {
   EXPECT_THROW(intrinsics_from_json(nlohmann::json::array()), std::invalid_argument);
 }
 
+TEST(IntrinsicsJson, ProjectionModelRoundTripsAndOldJsonIsWithoutDistortion) {
+  CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
+  k.model = ProjectionModel::kWithDistortion;
+  k.kud = 0.031;
+  k.kdu = -0.0302;
+  const nlohmann::json j = intrinsics_to_json(k);
+  EXPECT_EQ(j["model"], "perspectiveProjWithDistortion");
+  EXPECT_EQ(intrinsics_from_json(j), k);
+  // JSON written before the model was recorded (maps, recordings): the pinhole, as it was.
+  nlohmann::json old = j;
+  old.erase("model");
+  old.erase("kud");
+  old.erase("kdu");
+  const CameraIntrinsics back = intrinsics_from_json(old);
+  EXPECT_EQ(back.model, ProjectionModel::kWithoutDistortion);
+  EXPECT_EQ(back.kud, 0.0);
+  nlohmann::json bad = j;
+  bad["model"] = "fisheye";
+  try {
+    intrinsics_from_json(bad);
+    FAIL() << "unknown model accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("fisheye"), std::string::npos) << e.what();
+  }
+  // Coefficients without the model that uses them are refused (validate()).
+  old["kud"] = 0.03;
+  EXPECT_THROW(intrinsics_from_json(old), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pepper::core::camera

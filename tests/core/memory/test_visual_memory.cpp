@@ -200,6 +200,41 @@ TEST_F(VisualMemoryTest, IntrinsicsMismatchNamed) {
   expect_error(MapError::Kind::kIntrinsicsMismatch, "manifest.json", opt);
 }
 
+// The map records the camera's projection model and its coefficients (issue 31): a map taught
+// through one model refuses a camera with another, and the message names both.
+TEST_F(VisualMemoryTest, ProjectionModelIsRecordedAndAMismatchNamesBothModels) {
+  const fs::path with_dir = root_ / "map_with_distortion";
+  VisualMemory distorted = map_;
+  distorted.camera.model = ProjectionModel::kWithDistortion;
+  distorted.camera.kud = 0.031;
+  distorted.camera.kdu = -0.0302;
+  save_map(distorted, with_dir);
+  const VisualMemory back = load_map(with_dir);
+  EXPECT_EQ(back.camera.model, ProjectionModel::kWithDistortion);
+  EXPECT_DOUBLE_EQ(back.camera.kud, 0.031);
+  EXPECT_DOUBLE_EQ(back.camera.kdu, -0.0302);
+
+  LoadOptions same;
+  same.expected_camera = distorted.camera;
+  EXPECT_NO_THROW(load_map(with_dir, same));
+  LoadOptions pinhole;
+  pinhole.expected_camera = map_.camera;  // same focal lengths and centre, no distortion
+  for (const auto& [dir, opt] : {std::pair{with_dir, pinhole}, std::pair{dir_, same}}) {
+    try {
+      load_map(dir, opt);
+      FAIL() << "a camera of another model accepted for " << dir;
+    } catch (const MapError& e) {
+      EXPECT_EQ(e.kind(), MapError::Kind::kIntrinsicsMismatch) << e.what();
+      const std::string what = e.what();
+      EXPECT_NE(what.find("perspectiveProjWithDistortion"), std::string::npos) << what;
+      EXPECT_NE(what.find("perspectiveProjWithoutDistortion"), std::string::npos) << what;
+    }
+  }
+  LoadOptions other_kud = same;
+  other_kud.expected_camera->kud = 0.05;
+  EXPECT_THROW(load_map(with_dir, other_kud), MapError);
+}
+
 // Every single-bit flip and every truncation of a features file ends in a MapError, never a
 // crash; with the checksums of the manifest patched to agree (a "consistent" corruption), the
 // feature decoder's own checks must catch it.

@@ -3,18 +3,36 @@
 //
 // Normalised coordinates (METHOD.md, "Setting"): x_norm = (u_px - cx_px) / fx_px,
 // y_norm = (v_px - cy_px) / fy_px. Camera axes: x right, y down, z forward (docs/conventions.md).
-// Distortion is not modelled: Pepper's top camera has kud ~ 0.03 (PEPPER.md), negligible for
-// the qualitative servoing of the method.
+// Projection model: ViSP's two perspective models (vpCameraParameters), recorded with the
+// parameters so that a calibration written with distortion is not silently read as one without:
+//   kWithoutDistortion  perspectiveProjWithoutDistortion: the pinhole above; kud = kdu = 0.
+//   kWithDistortion     perspectiveProjWithDistortion: one radial coefficient each way, in
+//                       normalised units (so scaled_to() keeps them):
+//                         undistorted -> distorted  u = cx + fx x (1 + kud r^2), r^2 = x^2 + y^2
+//                         distorted -> undistorted  x = (u - cx)/fx (1 + kdu r_d^2), r_d^2 from
+//                         the distorted normalised coordinates.
+// Pepper's top camera has kud ~ 0.03 (PEPPER.md); normalize()/denormalize() are the pinhole maps
+// and do not apply the distortion (the features are not undistorted yet, issue 31).
 //
 // Invariant (checked by validate()): width_px, height_px > 0; fx_px, fy_px > 0 and finite;
-// cx_px, cy_px finite.
+// cx_px, cy_px, kud, kdu finite; kud = kdu = 0 for kWithoutDistortion.
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <opencv2/core/types.hpp>
 
 namespace pepper::core {
+
+/// ViSP's perspective projection models (see above).
+enum class ProjectionModel { kWithoutDistortion, kWithDistortion };
+
+/// ViSP's names, "perspectiveProjWithoutDistortion" / "perspectiveProjWithDistortion", as
+/// written in camera XML files, maps and messages.
+const char* to_string(ProjectionModel model);
+/// The inverse of to_string; std::nullopt for any other text.
+std::optional<ProjectionModel> projection_model_from_string(const std::string& name);
 
 struct CameraIntrinsics {
   int width_px = 0;
@@ -23,6 +41,9 @@ struct CameraIntrinsics {
   double fy_px = 0.0;
   double cx_px = 0.0;
   double cy_px = 0.0;
+  ProjectionModel model = ProjectionModel::kWithoutDistortion;
+  double kud = 0.0;  ///< radial, undistorted -> distorted (ViSP's kud); 0 without distortion
+  double kdu = 0.0;  ///< radial, distorted -> undistorted (ViSP's kdu); 0 without distortion
 
   /// Pepper's top head camera at VGA (640x480). Source: the public QVGA calibration of a Pepper
   /// top camera (fx 298.13, fy 298.72, cx 159.15, cy 118.91; PEPPER.md) scaled to VGA with
@@ -47,9 +68,9 @@ struct CameraIntrinsics {
   bool operator==(const CameraIntrinsics&) const = default;
 };
 
-/// The six fields read by their key names in intrinsics files (width_px, height_px, fx_px,
+/// The six pinhole fields read by their key names in intrinsics files (width_px, height_px, fx_px,
 /// fy_px, cx_px, cy_px) through get(key) -> double, which throws for a missing or non-numeric
-/// key (JSON and YAML readers share this). Not validated.
+/// key (JSON and YAML readers share this); the model stays kWithoutDistortion. Not validated.
 template <class Get>
 CameraIntrinsics intrinsics_from_keys(Get&& get) {
   CameraIntrinsics k;

@@ -1,7 +1,9 @@
 #pragma once
 // The one JSON form of camera intrinsics, shared by intrinsics files, map manifests and
 // recordings: {"width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px"} (pixels, pixel
-// centres at integer coordinates; see intrinsics.hpp).
+// centres at integer coordinates) and the projection model {"model", "kud", "kdu"} (ViSP's model
+// name and its radial coefficients; see intrinsics.hpp). "model", "kud" and "kdu" are optional
+// when read: JSON written before the model was recorded is perspectiveProjWithoutDistortion.
 
 #include <nlohmann/json.hpp>
 

@@ -6,7 +6,8 @@
 // (core/features/image_features.hpp), plus the effective configuration as JSON text.
 //
 // On disk, a map is a folder (docs/method/map_format.md):
-//   manifest.json          format name + version, camera intrinsics, parameters, key images in
+//   manifest.json          format name + version, camera intrinsics (with the projection
+//                          model, intrinsics_json.hpp), parameters, key images in
 //                          order (source frame index, t_ns, optional travelled_m and odom,
 //                          file names, byte sizes, CRC-32s, feature counts), final image
 //                          index, and the manifest's own CRC-32
