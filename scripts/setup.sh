@@ -11,7 +11,7 @@ PACKAGES=(
   libopencv-dev libopencv-contrib-dev libeigen3-dev libvisp-dev libxml2-dev visp-images-data
   libboost-dev libboost-system-dev libssl-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev
+  libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
   clang libclang-rt-14-dev
   chromium python3
 )
