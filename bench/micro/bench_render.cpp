@@ -54,15 +54,14 @@ std::vector<Eigen::Isometry3d> poses_along_path(const sim::World& w, int n) {
   return out;
 }
 
-void BM_Render(benchmark::State& state) {
-  const size_t wi = static_cast<size_t>(state.range(0));
-  const int width = static_cast<int>(state.range(1));
-  const int height = width * 3 / 4;
+// Renders world `wi` along its path with `intrinsics` once per iteration (fps counter, label).
+void render_along_path(benchmark::State& state, size_t wi,
+                       const pepper::core::CameraIntrinsics& intrinsics) {
   const sim::World& w = world(wi);
   const auto poses = poses_along_path(w, 16);
   sim::Renderer renderer;
   sim::ViewState view;
-  view.intrinsics = pepper::core::CameraIntrinsics::pepper_top_vga().scaled_to(width, height);
+  view.intrinsics = intrinsics;
   cv::Mat img;
   size_t k = 0;
   for (auto _ : state) {
@@ -74,32 +73,25 @@ void BM_Render(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
   state.counters["fps"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-  state.SetLabel(kWorlds[wi] + " " + std::to_string(width) + "x" + std::to_string(height));
+  state.SetLabel(kWorlds[wi] + " " + std::to_string(intrinsics.width_px) + "x" +
+                 std::to_string(intrinsics.height_px));
+}
+
+void BM_Render(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(1));
+  render_along_path(state, static_cast<size_t>(state.range(0)),
+                    pepper::core::CameraIntrinsics::pepper_top_vga().scaled_to(width, width * 3 / 4));
 }
 
 // The same with Pepper's lens (issue 31: intrinsics with ViSP's distortion model, kud 0.03): the
 // extra cost is the per-frame remap of the radiance and depth (renderer.cpp).
 void BM_RenderWithDistortion(benchmark::State& state) {
   const int width = static_cast<int>(state.range(0));
-  const sim::World& w = world(0);
-  const auto poses = poses_along_path(w, 16);
-  sim::Renderer renderer;
-  sim::ViewState view;
-  view.intrinsics = pepper::core::CameraIntrinsics::pepper_top_vga().scaled_to(width, width * 3 / 4);
-  view.intrinsics.model = pepper::core::ProjectionModel::kWithDistortion;
-  view.intrinsics.kud = 0.03;
-  view.intrinsics.kdu = -0.029;
-  cv::Mat img;
-  size_t k = 0;
-  for (auto _ : state) {
-    view.T_world_cam = poses[k % poses.size()];
-    view.frame_index = k++;
-    renderer.render(w, view, img);
-    benchmark::DoNotOptimize(img.data);
-  }
-  state.counters["fps"] =
-      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-  state.SetLabel(kWorlds[0] + " " + std::to_string(width) + "x" + std::to_string(width * 3 / 4));
+  auto intrinsics = pepper::core::CameraIntrinsics::pepper_top_vga().scaled_to(width, width * 3 / 4);
+  intrinsics.model = pepper::core::ProjectionModel::kWithDistortion;
+  intrinsics.kud = 0.03;
+  intrinsics.kdu = -0.029;
+  render_along_path(state, 0, intrinsics);
 }
 
 // Full MockRobot capture (clock, kinematics, render) at VGA while driving, for reference.
