@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/ceiling/canonical_view.hpp"
+#include "core/ceiling/landmarks.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/renderer.hpp"
 #include "sim/world.hpp"
@@ -148,6 +149,55 @@ TEST(CeilingView, TileGroutLinesAreStraightAndEvenlySpacedInTheCanonicalView) {
   ASSERT_GE(grout_rows.size(), 2u) << "no grout lines found";
   for (size_t i = 1; i < grout_rows.size(); ++i)
     EXPECT_NEAR(grout_rows[i] - grout_rows[i - 1], 0.6 * frame.px_per_m, 2.0) << i;
+}
+
+// Landmarks (ORB on the canonical view) tracked between two renders give the base's motion: a
+// translation as the same pure image translation, a turn on the spot as a rotation by -yaw (a
+// left turn turns the content counter-clockwise on the screen, i.e. negative in image axes).
+TEST(CeilingViewLandmarks, TrackingBetweenRendersRecoversTheBasesMotion) {
+  for (const std::string texture : {"plaster", "tiles"}) {
+    SCOPED_TRACE(texture);
+    const World world = parse_world(hall_yaml(texture), "ceiling_hall.yaml",
+                                    std::filesystem::path(PEPPER_SOURCE_DIR) / "worlds");
+    Renderer renderer(clean_options());
+    const double pitch = -0.7068;
+    core::ceiling::CeilingCamera camera;
+    camera.intrinsics = core::CameraIntrinsics::pepper_top_vga().scaled_to(320, 240);
+    camera.head_pitch_rad = pitch;
+    camera.ceiling_above_cam_m = 1.45;  // only to size the frame
+    const auto frame = core::ceiling::fit_frame(camera, 80.0, 3.5);
+    const Pose2D a{0.4, -0.3, 0.2};
+    const CeilingShot shot_a = shoot(world, renderer, a, pitch, frame);
+    const auto la = core::ceiling::extract_landmarks(shot_a.canonical, shot_a.seen);
+    ASSERT_GT(la.keypoints.size(), 50u);
+    for (const auto& k : la.keypoints) {  // only where the camera sees the ceiling
+      ASSERT_EQ(shot_a.seen.at<uint8_t>(cv::Point(k.pt)), 255);
+    }
+
+    // 0.12 m forward and 0.06 m to the left.
+    Pose2D b = a;
+    b.x_m += 0.12 * std::cos(a.yaw_rad) - 0.06 * std::sin(a.yaw_rad);
+    b.y_m += 0.12 * std::sin(a.yaw_rad) + 0.06 * std::cos(a.yaw_rad);
+    const CeilingShot shot_b = shoot(world, renderer, b, pitch, frame);
+    const auto moved = core::ceiling::track_landmarks(
+        la, core::ceiling::extract_landmarks(shot_b.canonical, shot_b.seen));
+    ASSERT_TRUE(moved.found) << moved.matches << " matches, " << moved.inliers << " inliers";
+    EXPECT_GE(moved.inliers, 30);
+    EXPECT_NEAR(moved.scale, 1.0, 0.01);
+    EXPECT_NEAR(moved.angle_rad, 0.0, 0.005);
+    EXPECT_NEAR(moved.A_b_a(0, 2), -80.0 * 0.06, 1.0);
+    EXPECT_NEAR(moved.A_b_a(1, 2), 80.0 * 0.12, 1.0);
+
+    // A left turn on the spot by 0.12 rad.
+    Pose2D c = a;
+    c.yaw_rad += 0.12;
+    const CeilingShot shot_c = shoot(world, renderer, c, pitch, frame);
+    const auto turned = core::ceiling::track_landmarks(
+        la, core::ceiling::extract_landmarks(shot_c.canonical, shot_c.seen));
+    ASSERT_TRUE(turned.found) << turned.matches << " matches, " << turned.inliers << " inliers";
+    EXPECT_NEAR(turned.scale, 1.0, 0.01);
+    EXPECT_NEAR(turned.angle_rad, -0.12, 0.005);
+  }
 }
 
 }  // namespace
