@@ -43,6 +43,8 @@ const char* to_string(MapError::Kind kind) {
       return "intrinsics_mismatch";
     case Kind::kInvalidMap:
       return "invalid_map";
+    case Kind::kModeMismatch:
+      return "mode_mismatch";
   }
   return "unknown";
 }
@@ -121,6 +123,7 @@ struct ManifestKey {
 };
 
 struct Manifest {
+  NavMode mode = NavMode::kForward;
   CameraIntrinsics camera;
   std::string parameters_json;
   std::vector<ManifestKey> keys;
@@ -165,6 +168,13 @@ Manifest parse_manifest(const fs::path& dir) {
     if (j.at("manifest_crc32").get<uint32_t>() != manifest_crc(j)) {
       throw MapError(Kind::kChecksumMismatch, path,
                      path.string() + ": manifest CRC-32 mismatch (edited or corrupt)");
+    }
+    if (j.contains("mode")) {  // absent in maps saved before issue 24: forward, the only mode
+      const json& mode = j.at("mode");
+      const auto parsed =
+          mode.is_string() ? nav_mode_from_string(mode.get<std::string>()) : std::nullopt;
+      if (!parsed) throw malformed("mode " + mode.dump() + ": must be \"forward\" or \"ceiling\"");
+      m.mode = *parsed;
     }
     try {
       m.camera = camera::intrinsics_from_json(j.at("camera"));
@@ -254,6 +264,7 @@ fs::path sibling(const fs::path& dir, const std::string& tag) {
 
 MapSummary summary_from_manifest(const Manifest& m) {
   MapSummary s;
+  s.mode = m.mode;
   s.key_image_count = static_cast<int>(m.keys.size());
   s.final_index = m.final_index;
   s.camera = m.camera;
@@ -347,6 +358,7 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
     json manifest = {
         {"format", kFormatName},
         {"format_version", kMapFormatVersion},
+        {"mode", to_string(map.mode)},
         {"camera", camera::intrinsics_to_json(map.camera)},
         {"parameters", parameters},
         {"key_images", keys},
@@ -382,6 +394,14 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
     throw MapError(Kind::kMissingFile, dir, dir.string() + ": no such map folder");
   }
   const Manifest m = parse_manifest(dir);
+  if (options.expected_mode && *options.expected_mode != m.mode) {
+    // Before the camera: a map of the other mode is the wrong map, whatever its camera.
+    throw MapError(Kind::kModeMismatch, dir / kManifestName,
+                   (dir / kManifestName).string() + ": map taught in " + to_string(m.mode) +
+                       " mode, this run is in " + to_string(*options.expected_mode) +
+                       " mode: run with --mode " + to_string(m.mode) + " or teach a " +
+                       to_string(*options.expected_mode) + "-mode map");
+  }
   if (options.expected_camera) {
     const CameraIntrinsics expected =
         options.expected_camera->scaled_to(m.camera.width_px, m.camera.height_px);
@@ -407,6 +427,7 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
     }
   }
   VisualMemory map;
+  map.mode = m.mode;
   map.camera = m.camera;
   map.parameters_json = m.parameters_json;
   for (const ManifestKey& k : m.keys) {
@@ -446,6 +467,7 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
 
 MapSummary summarize(const VisualMemory& map) {
   MapSummary s;
+  s.mode = map.mode;
   s.key_image_count = static_cast<int>(map.key_images.size());
   s.final_index = map.final_index();
   s.camera = map.camera;
@@ -472,7 +494,8 @@ MapSummary read_map_info(const fs::path& dir) {
 
 std::string MapSummary::to_text() const {
   std::ostringstream os;
-  os << "key images: " << key_image_count << " (final image: " << final_index << ")\n"
+  os << "mode: " << to_string(mode) << "\n"
+     << "key images: " << key_image_count << " (final image: " << final_index << ")\n"
      << "taught duration: " << std::fixed << std::setprecision(1) << taught_duration_s << " s"
      << " (frames " << first_frame_index << ".." << last_frame_index << ")\n"
      << "camera: " << camera.width_px << "x" << camera.height_px << " fx " << std::setprecision(2)

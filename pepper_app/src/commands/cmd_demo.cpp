@@ -87,6 +87,8 @@ int run_demo(const DemoArgs& args) {
                                                "robot.camera_height_px=240"});
     }
     const AppConfig config = load_session_config(common);
+    const core::NavMode mode = parse_mode(common.mode);
+    refuse_unimplemented_mode(mode, "demo");
     const std::filesystem::path out = a.out;
     std::filesystem::create_directories(out);
     const std::filesystem::path map_dir = out / "map";
@@ -111,7 +113,7 @@ int run_demo(const DemoArgs& args) {
     to.map_dir = map_dir;
     to.recording_dir = rec_dir;
     to.camera = camera_request(config);
-    to.head = head_request(config);
+    to.head = head_request(config, mode);
     to.teach = config.teach_options();
     to.config_json = config_to_json(config).dump();
     to.scripted = true;

@@ -14,6 +14,7 @@
 #include "config/app_config.hpp"
 #include "evaluation/closed_loop.hpp"
 #include "evaluation/output.hpp"
+#include "session/session_cli.hpp"
 #include "sim/world.hpp"
 
 namespace pepper::app {
@@ -34,6 +35,7 @@ struct EvaluateArgs {
   std::vector<std::string> disturbances{"none"};
   bool compare_features = false;
   std::string size = "640x480";
+  std::string mode = "forward";  ///< --mode (core/nav_mode.hpp): only forward is implemented
   double lateral_m = 0.3;
   double yaw_deg = 10.0;
   double along_m = -1.0;
@@ -95,10 +97,11 @@ int run_evaluate(const EvaluateArgs& a) {
     ConfigSources sources = a.config;
     if (!a.controller.empty()) sources.sets.push_back("navigator.controller=" + a.controller);
     const AppConfig config = load_app_config(sources);
+    const core::NavMode mode = parse_mode(a.mode);
+    refuse_unimplemented_mode(mode, "evaluate");
     o.navigator = config.navigator_options();
     o.key_images = config.teach_options().selector;
-    o.head.head_yaw_rad = config.robot.head_yaw_rad;
-    o.head.head_pitch_rad = config.robot.head_pitch_rad;
+    o.head = head_request(config, mode);
     o.give_up_lost_s = config.replay.give_up_lost_s;
     o.give_up_not_localised_s = config.replay.give_up_not_localised_s;
     o.arrival_tolerance_m = config.replay.arrival_tolerance_m;
@@ -188,6 +191,7 @@ void register_evaluate_command(CLI::App& app) {
   cmd->add_option("--trace", args->trace_dir,
                   "Write one JSON-lines trace per run here (ground truth, command, telemetry per "
                   "frame) to diagnose a failed run");
+  add_mode_option(cmd, args->mode);
   cmd->add_option("--starts", args->starts, "Replay runs per configuration")->capture_default_str();
   cmd->add_option("--run", args->only_runs,
                   "Replay only these runs of the --starts (1-based; same starts and seeds as in "

@@ -49,7 +49,11 @@ int run_replay(const ReplayArgs& a) {
   Console& console = session_console(a.common);
   try {
     const AppConfig config = load_session_config(a.common);
-    core::memory::VisualMemory map = core::memory::load_map(a.map);
+    const core::NavMode mode = parse_mode(a.common.mode);
+    refuse_unimplemented_mode(mode, "replay");
+    core::memory::LoadOptions load;
+    load.expected_mode = mode;  // a map of the other mode is refused, naming both
+    core::memory::VisualMemory map = core::memory::load_map(a.map, load);
     const RobotConnectOptions connect = robot_connect_options(a.common, config);
     RobotConnection robot = open_robot(a.common.robot, connect);
     if (robot.mock && a.mock_start >= 0) {
@@ -80,7 +84,7 @@ int run_replay(const ReplayArgs& a) {
       console.line("replay: camera " + std::to_string(o.camera.width_px) + "x" +
                    std::to_string(o.camera.height_px) + ", the size the map was taught at");
     }
-    o.head = head_request(config);
+    o.head = head_request(config, mode);
     o.navigator = config.navigator_options();
     o.frame_timeout_ms = config.robot.frame_timeout_ms();
     o.max_frames = a.max_frames;

@@ -84,6 +84,8 @@ int run_teach(const TeachArgs& a) {
   Console& console = session_console(a.common);
   try {
     const AppConfig config = load_session_config(a.common);
+    const core::NavMode mode = parse_mode(a.common.mode);
+    refuse_unimplemented_mode(mode, "teach");
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
     if (a.scripted && a.manual) return report_error(
           "--scripted and --manual exclude each other: drop one (--scripted drives the mock "
@@ -93,7 +95,7 @@ int run_teach(const TeachArgs& a) {
     o.recording_dir =
         a.recording.empty() ? free_recording_dir(a.map) : std::filesystem::path(a.recording);
     o.camera = camera_request(config);
-    o.head = head_request(config);
+    o.head = head_request(config, mode);
     o.teach = config.teach_options();
     o.config_json = config_to_json(config).dump();
     const bool ui_wanted = a.common.ui || a.common.ui_port >= 0;

@@ -7,6 +7,7 @@
 #include "naoqi_bridge/qi/errors.hpp"
 #include "session/console.hpp"
 #include "session/recording.hpp"
+#include "session/session_cli.hpp"
 #include "sim/world.hpp"
 
 namespace pepper::app {
@@ -14,6 +15,12 @@ namespace pepper::app {
 namespace qi = naoqi_bridge::qi;
 
 std::string next_step_for(const std::exception& e) {
+  // Their messages say what to do (the other --mode, or another map): no generic advice.
+  if (dynamic_cast<const ModeUnavailableError*>(&e) != nullptr) return "";
+  if (const auto* map_error = dynamic_cast<const core::memory::MapError*>(&e);
+      map_error != nullptr && map_error->kind() == core::memory::MapError::Kind::kModeMismatch) {
+    return "";
+  }
   if (dynamic_cast<const core::memory::MapError*>(&e) != nullptr) {
     return "give a map folder written by `pepper_app teach` or `pepper_app map build` "
            "(`pepper_app map info DIR` checks one); a damaged map can be rebuilt from its "

@@ -41,6 +41,9 @@ struct RobotConfig {
   int camera_fps = 15;
   double head_pitch_rad = 0.0;  ///< 0 = optical axis horizontal (METHOD.md assumes it)
   double head_yaw_rad = 0.0;
+  /// Head pitch of the lock in ceiling mode (--mode ceiling, issue 24): looking up, near
+  /// HeadPitch's limit (-0.7068 rad), so the camera sees the ceiling from ~0.8 m ahead.
+  double ceiling_head_pitch_rad = -0.7;
   double watchdog_s = 0.3;       ///< bridge stops the base without a fresh command this long
   double frame_timeout_s = 1.0;  ///< session stops the base when no frame comes this long
   /// Robot-side deadman: each velocity command ends by itself on the robot after this long

@@ -31,6 +31,34 @@ void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool wit
   cmd->add_flag("--ui", args.ui, "Serve the teach UI on 127.0.0.1 (port: ui.port)");
   cmd->add_option("--ui-port", args.ui_port, "Serve the teach UI on this port (0 = any free port)")
       ->check(CLI::Range(0, 65535));
+  add_mode_option(cmd, args.mode);
+}
+
+void add_mode_option(CLI::App* cmd, std::string& mode) {
+  cmd->add_option("--mode", mode,
+                  "What the robot navigates by: forward (the camera looking ahead) or ceiling "
+                  "(the camera looking up; not implemented yet: refused, docs/method/ceiling.md)")
+      ->check(CLI::IsMember({"forward", "ceiling"}))
+      ->capture_default_str();
+}
+
+core::NavMode parse_mode(const std::string& text) {
+  const auto mode = core::nav_mode_from_string(text);
+  if (!mode) throw ConfigError("--mode " + text + ": must be forward or ceiling");
+  return *mode;
+}
+
+void refuse_unimplemented_mode(core::NavMode mode, const std::string& command) {
+  if (mode == core::NavMode::kForward) return;
+  // Never pretend: without the mosaic there is nothing to teach or to localise against.
+  throw ModeUnavailableError(
+      command +
+      " --mode ceiling: ceiling mode cannot teach or replay yet. What exists: the "
+      "canonical ceiling view (the homography from the pitched-up camera to a camera looking "
+      "straight up, core/ceiling/canonical_view.hpp), the mode recorded in maps and the ceiling "
+      "head pitch (robot.ceiling_head_pitch_rad). Missing (issue 24): ceiling landmarks, the "
+      "mosaic, localisation against it, relay images and the drive between them; see "
+      "docs/method/ceiling.md. Use --mode forward (the default).");
 }
 
 EventSink::EventSink(const std::string& spec) {
@@ -117,10 +145,11 @@ naoqi_bridge::CameraRequest camera_request_for_map(const CommonSessionArgs& args
   return r;
 }
 
-naoqi_bridge::HeadLockRequest head_request(const AppConfig& config) {
+naoqi_bridge::HeadLockRequest head_request(const AppConfig& config, core::NavMode mode) {
   naoqi_bridge::HeadLockRequest r;
   r.head_yaw_rad = config.robot.head_yaw_rad;
-  r.head_pitch_rad = config.robot.head_pitch_rad;
+  r.head_pitch_rad = mode == core::NavMode::kCeiling ? config.robot.ceiling_head_pitch_rad
+                                                     : config.robot.head_pitch_rad;
   return r;
 }
 

@@ -6,16 +6,16 @@
 // {"event":"listening","url":"http://127.0.0.1:PORT/"}, plus a human line on the console), and
 // the machine-readable event sink (--events FILE, or - for stdout).
 
+#include <CLI/CLI.hpp>
 #include <fstream>
 #include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
-
 #include "config/app_config.hpp"
 #include "core/camera/intrinsics.hpp"
+#include "core/nav_mode.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
 #include "session/robot_connection.hpp"
 
@@ -37,6 +37,7 @@ struct CommonSessionArgs {
   std::string tls_pin;           ///< tcps: required certificate fingerprint (replaces the file)
   bool trust_new_robot = false;  ///< tcps: trust and remember a robot seen for the first time
   std::string events;  ///< --events: JSON-lines event file, "-" for stdout, "" for none
+  std::string mode = "forward";  ///< --mode: forward or ceiling (core/nav_mode.hpp)
 };
 
 class Console;
@@ -58,8 +59,8 @@ class EventSink {
   std::ostream* out_ = nullptr;
 };
 
-/// Adds --config, --preset, --set, --ui, --ui-port, --events (and --robot, --user, --password-file,
-/// --tls-pin, --trust-new-robot when `with_robot`).
+/// Adds --config, --preset, --set, --ui, --ui-port, --events, --mode (and --robot, --user,
+/// --password-file, --tls-pin, --trust-new-robot when `with_robot`).
 void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool with_robot);
 
 /// Defaults + --preset + --config file + --set overrides, validated. Throws ConfigError listing
@@ -68,7 +69,28 @@ AppConfig load_session_config(const CommonSessionArgs& args);
 
 RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config);
 naoqi_bridge::CameraRequest camera_request(const AppConfig& config);
-naoqi_bridge::HeadLockRequest head_request(const AppConfig& config);
+/// The head lock: robot.head_pitch_rad in forward mode, robot.ceiling_head_pitch_rad in ceiling
+/// mode (the yaw is robot.head_yaw_rad in both).
+naoqi_bridge::HeadLockRequest head_request(const AppConfig& config,
+                                           core::NavMode mode = core::NavMode::kForward);
+
+/// A mode asked for that the commands do not implement; its message says what exists and what to
+/// do instead (a ConfigError: exit 2, refused before anything was started).
+class ModeUnavailableError : public ConfigError {
+ public:
+  using ConfigError::ConfigError;
+};
+
+/// Adds `--mode forward|ceiling` (default forward) to a command.
+void add_mode_option(CLI::App* cmd, std::string& mode);
+
+/// The mode of a --mode value; throws ConfigError listing the modes for any other text.
+core::NavMode parse_mode(const std::string& text);
+
+/// Issue 24 is not done: teach, replay, demo and evaluate drive only in forward mode. Throws
+/// ModeUnavailableError (exit 2, nothing moved) for ceiling mode, saying what exists of it and what
+/// is missing; returns for forward mode. `command` names the command in the message.
+void refuse_unimplemented_mode(core::NavMode mode, const std::string& command);
 
 /// The camera request for replaying a map taught with `map_camera`: the map decides the size
 /// (the rest as camera_request). Throws ConfigError, naming the setting to drop, when a --set or

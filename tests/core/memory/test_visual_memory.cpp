@@ -411,6 +411,56 @@ TEST_F(VisualMemoryTest, OdometryRoundTripsAndOldMapsLoadWithout) {
   EXPECT_FALSE(fs::exists(root_ / "bad_odom"));
 }
 
+// The navigation mode (issue 24): recorded in the manifest and read back; a manifest without it
+// (every map saved before the field) is a forward map; an unknown mode is malformed; a run of the
+// other mode refuses the map, naming both modes, whatever its camera.
+TEST_F(VisualMemoryTest, ModeRoundTripsOldMapsAreForwardAndTheOtherModeIsRefused) {
+  EXPECT_EQ(load_map(dir_).mode, NavMode::kForward);  // the default
+  VisualMemory ceiling = synthetic_map(2);
+  ceiling.mode = NavMode::kCeiling;
+  save_map(ceiling, dir_);
+  EXPECT_EQ(load_map(dir_).mode, NavMode::kCeiling);
+  EXPECT_EQ(summarize(load_map(dir_)).mode, NavMode::kCeiling);
+  EXPECT_EQ(read_map_info(dir_).mode, NavMode::kCeiling);
+  EXPECT_NE(read_map_info(dir_).to_text().find("mode: ceiling"), std::string::npos);
+  LoadOptions ceiling_run;
+  ceiling_run.expected_mode = NavMode::kCeiling;
+  EXPECT_EQ(load_map(dir_, ceiling_run).key_images.size(), 2u);
+  LoadOptions forward_run;
+  forward_run.expected_mode = NavMode::kForward;
+  forward_run.expected_camera = CameraIntrinsics::pepper_top_vga();  // the mode is checked first
+  expect_error(MapError::Kind::kModeMismatch, "manifest.json", forward_run);
+  try {
+    load_map(dir_, forward_run);
+  } catch (const MapError& e) {
+    EXPECT_NE(std::string(e.what()).find("taught in ceiling mode"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("this run is in forward mode"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_STREQ(to_string(MapError::Kind::kModeMismatch), "mode_mismatch");
+
+  const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
+  EXPECT_EQ(manifest.at("mode"), "ceiling");
+  auto write_patched = [&](nlohmann::json j) {
+    j.erase("manifest_crc32");
+    const std::string canon = j.dump();
+    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
+    const std::string text = j.dump(2);
+    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
+  };
+  auto old = manifest;  // a map from before the field
+  old.erase("mode");
+  write_patched(old);
+  EXPECT_EQ(load_map(dir_, forward_run).mode, NavMode::kForward);
+  expect_error(MapError::Kind::kModeMismatch, "manifest.json", ceiling_run);
+  for (const nlohmann::json& bad : {nlohmann::json("sideways"), nlohmann::json(1)}) {
+    auto unknown = manifest;
+    unknown["mode"] = bad;
+    write_patched(unknown);
+    expect_error(MapError::Kind::kMalformed, "manifest.json");
+  }
+}
+
 TEST_F(VisualMemoryTest, InvalidMapsAreRefused) {
   EXPECT_THROW(save_map(synthetic_map(1), root_ / "one"), MapError);
   VisualMemory no_image = synthetic_map(2);

@@ -6,8 +6,9 @@
 // (core/features/image_features.hpp), plus the effective configuration as JSON text.
 //
 // On disk, a map is a folder (docs/method/map_format.md):
-//   manifest.json          format name + version, camera intrinsics (with the projection
-//                          model, intrinsics_json.hpp), parameters, key images in
+//   manifest.json          format name + version, navigation mode (nav_mode.hpp; absent in
+//                          maps saved before it: forward), camera intrinsics (with the
+//                          projection model, intrinsics_json.hpp), parameters, key images in
 //                          order (source frame index, t_ns, optional travelled_m and odom,
 //                          file names, byte sizes, CRC-32s, feature counts), final image
 //                          index, and the manifest's own CRC-32
@@ -22,8 +23,8 @@
 // no map plus a temporary folder that does not load (no manifest, or checksums that disagree).
 //
 // Errors: every problem with a map on disk (missing or extra-short file, bad checksum, wrong
-// version, malformed manifest, intrinsics mismatch, I/O failure) throws MapError naming the
-// offending file. Loading never crashes on corrupt input: every length is bounded by the bytes
+// version, malformed manifest, intrinsics or mode mismatch, I/O failure) throws MapError naming
+// the offending file. Loading never crashes on corrupt input: every length is bounded by the bytes
 // present before anything is allocated. Not thread-safe for concurrent saves to one path.
 
 #include <cstdint>
@@ -36,6 +37,7 @@
 
 #include "core/camera/intrinsics.hpp"
 #include "core/features/image_features.hpp"
+#include "core/nav_mode.hpp"
 #include "core/odometry.hpp"
 
 namespace pepper::core::memory {
@@ -58,6 +60,7 @@ struct KeyImage {
 };
 
 struct VisualMemory {
+  NavMode mode = NavMode::kForward;    ///< the view it was taught by (forward: the key images)
   CameraIntrinsics camera;             ///< intrinsics at the key images' size
   std::vector<KeyImage> key_images;    ///< tour order; back() is the final image
   std::string parameters_json = "{}";  ///< effective configuration (JSON object text)
@@ -76,6 +79,7 @@ class MapError : public std::runtime_error {
     kWrongVersion,        ///< format version not supported
     kIntrinsicsMismatch,  ///< map camera differs from the expected one
     kInvalidMap,          ///< a map object that cannot be saved (e.g. fewer than 2 key images)
+    kModeMismatch,        ///< map taught in another navigation mode than the expected one
   };
   MapError(Kind kind, std::filesystem::path path, const std::string& what);
   Kind kind() const { return kind_; }
@@ -96,6 +100,8 @@ struct LoadOptions {
   /// tolerance 1e-6 on focal lengths and principal point), else kIntrinsicsMismatch.
   std::optional<CameraIntrinsics> expected_camera;
   bool build_klt_pyramids = false;  ///< rebuild derived pyramids (else leave them empty)
+  /// When set, the map must have been taught in this mode, else kModeMismatch naming both.
+  std::optional<NavMode> expected_mode;
 };
 
 /// Loads and checks a map folder. Throws MapError naming the offending file.
@@ -103,6 +109,7 @@ VisualMemory load_map(const std::filesystem::path& dir, const LoadOptions& optio
 
 /// "map info": what a map holds, from a loaded map.
 struct MapSummary {
+  NavMode mode = NavMode::kForward;
   int key_image_count = 0;
   int final_index = -1;
   double taught_duration_s = 0.0;  ///< t_ns of the final image minus that of the first
