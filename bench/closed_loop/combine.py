@@ -38,9 +38,20 @@ TARGET_RMS_M = 0.05
 TARGET_MAX_M = 0.15
 
 
+def disturbance_name(e):
+    """The disturbances, the light one with its factor (x0.6 and x1.4 are different rows; a
+    spread over the runs, evaluate's default, shows its range)."""
+    factors = sorted({r.get("light_factor") for r in e["runs"] if r.get("light_factor")})
+    names = []
+    for d in e["disturbances"]:
+        if d == "light" and factors:
+            d += f" x{factors[0]:g}" if len(factors) == 1 else f" x{factors[0]:g}-{factors[-1]:g}"
+        names.append(d)
+    return "+".join(names) or "none"
+
+
 def key_of(e):
-    return (e["world"], e["features"], e["controller"], e["size"],
-            "+".join(e["disturbances"]) or "none")
+    return (e["world"], e["features"], e["controller"], e["size"], disturbance_name(e))
 
 
 def fmt(x, scale=1.0, digits=1):

@@ -11,8 +11,8 @@ import tempfile
 COMBINE = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "closed_loop", "combine.py")
 
 
-def run(index, success, rms_m, max_m, corrected_m=None, outcome=None):
-    return {"index": index, "success": success, "outcome": outcome or ("complete" if success else "lost"),
+def run(index, success, rms_m, max_m, corrected_m=None, outcome=None, light_factor=0.0):
+    return {"index": index, "success": success, "light_factor": light_factor, "outcome": outcome or ("complete" if success else "lost"),
             "detail": "" if success else "no features", "travelled_m": 4.2,
             "lateral_rms_m": rms_m, "lateral_max_m": max_m, "first_under_5cm_m": 1.0,
             "step_ms_median": 12.0,
@@ -40,7 +40,13 @@ def main():
         with open(good, "w") as fh:
             json.dump(evaluation("room", "none", [run(0, True, 0.01, 0.03, 0.04), run(1, True, 0.02, 0.05, 0.10)]), fh)
         with open(bad, "w") as fh:
-            json.dump(evaluation("room", "light", [run(0, True, 0.01, 0.03), run(1, False, None, None)]), fh)
+            json.dump(evaluation("room", "light", [run(0, True, 0.01, 0.03, light_factor=0.6),
+                                                   run(1, False, None, None, light_factor=0.6)]), fh)
+        # The same world and disturbance at another light factor is another configuration.
+        bright = os.path.join(d, "room_light1.4.json")
+        with open(bright, "w") as fh:
+            json.dump(evaluation("room", "light", [run(0, True, 0.01, 0.03, light_factor=1.4),
+                                                   run(1, True, 0.01, 0.03, light_factor=1.4)]), fh)
         with open(over, "w") as fh:
             json.dump(evaluation("hall", "person", [run(0, True, 0.08, 0.20)]), fh)
         # The good configuration has its report beside it (matrix.sh: DIR/NAME/).
@@ -48,11 +54,12 @@ def main():
         for name in ("report.html", "top_view.png"):
             open(os.path.join(d, "room_none", name), "w").close()
         index = os.path.join(d, "index.html")
-        r = subprocess.run([sys.executable, COMBINE, good, bad, over, "--html", index],
+        r = subprocess.run([sys.executable, COMBINE, good, bad, bright, over, "--html", index],
                            capture_output=True, text=True)
         check(r.returncode == 0, f"exit code {r.returncode}: {r.stderr}")
         check("| room | none | 2/2 |" in r.stdout, "table row of room/none")
-        check("| room | light | 1/2 |" in r.stdout, "table row of room/light")
+        check("| room | light x0.6 | 1/2 |" in r.stdout, "table row of room/light x0.6")
+        check("| room | light x1.4 | 2/2 |" in r.stdout, "table row of room/light x1.4")
         # Corrections 4 and 10 cm: median 7.0, max 10.0.
         check("median 7.0 cm" in r.stdout and "max 10.0 cm" in r.stdout, "drift line: " + r.stdout[-300:])
         page = open(index).read() if os.path.exists(index) else ""

@@ -119,6 +119,7 @@ std::vector<std::string> NavigatorOptions::validate() const {
         "scale_line_max_angle_rad", scale_line_max_angle_rad, "in (0, 0.5]");
   check(dead_reckoning_max_m > 0.0, "dead_reckoning_max_m", dead_reckoning_max_m, "> 0");
   check(dead_reckoning_max_rad > 0.0, "dead_reckoning_max_rad", dead_reckoning_max_rad, "> 0");
+  check(odometry_steer_max_m > 0.0, "odometry_steer_max_m", odometry_steer_max_m, "> 0");
   check(min_point_texture >= 0.0, "min_point_texture", min_point_texture, ">= 0");
   check(arrival_scale_ratio > 0.0 && arrival_scale_ratio < 2.0, "arrival_scale_ratio",
         arrival_scale_ratio, "in (0, 2)");
@@ -774,7 +775,7 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
     const bool unlocated = options_.controller == ControllerKind::kVnhv && vnhv_unlocated_;
     if (omega && options_.controller == ControllerKind::kVnhv && odometry_steers()) {
       // VNHV has no estimate on this segment but the image still has features (IBVS has a
-      // demand), and a vision fix is at most dead_reckoning_max_m of odometry behind: the same
+      // demand), and a vision fix is at most odometry_steer_max_m of odometry behind: the same
       // law on the odometry's deviation from the taught path steers instead of IBVS. (No
       // usable feature at all: no demand, the transition table's dead reckoning.)
       bool on_the_spot = false;
@@ -936,7 +937,7 @@ double Navigator::odometry_demand(bool& on_the_spot) {
 
 bool Navigator::odometry_steers() const {
   return odom_ && tracker_.usable() && tracker_.estimate() && switcher_ &&
-         odom_since_fix_m_ < options_.dead_reckoning_max_m;
+         odom_since_fix_m_ < options_.odometry_steer_max_m;
 }
 
 Command Navigator::dead_reckon(int64_t t_ns, Telemetry& tel) {
