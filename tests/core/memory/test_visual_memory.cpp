@@ -61,6 +61,8 @@ VisualMemory synthetic_map(int n) {
   return map;
 }
 
+uint32_t crc32(const std::vector<char>& b);  // the maps' checksum (below)
+
 class VisualMemoryTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -73,6 +75,16 @@ class VisualMemoryTest : public ::testing::Test {
     save_map(map_, dir_);
   }
   void TearDown() override { fs::remove_all(root_); }
+
+  // Writes `j` as the map's manifest with a correct checksum: a map that passes the integrity
+  // check and holds what the test put in it.
+  void write_patched(nlohmann::json j) {
+    j.erase("manifest_crc32");
+    const std::string canon = j.dump();
+    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
+    const std::string text = j.dump(2);
+    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
+  }
 
   // Expects load_map to throw MapError of `kind` naming `file`.
   void expect_error(MapError::Kind kind, const fs::path& file, const LoadOptions& opt = {}) {
@@ -344,13 +356,6 @@ TEST_F(VisualMemoryTest, TravelledDistanceRoundTripsOrIsUnknown) {
   EXPECT_NE(info.to_text().find("driven: 0.90 m"), std::string::npos) << info.to_text();
 
   const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
-  auto write_patched = [&](nlohmann::json j) {
-    j.erase("manifest_crc32");
-    const std::string canon = j.dump();
-    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
-    const std::string text = j.dump(2);
-    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
-  };
   auto decreasing = manifest;
   decreasing["key_images"][2]["travelled_m"] = 0.3;
   write_patched(decreasing);
@@ -382,13 +387,6 @@ TEST_F(VisualMemoryTest, OdometryRoundTripsAndOldMapsLoadWithout) {
   EXPECT_EQ(read_map_info(dir_).key_images[1].odom->yaw_rad, 3.0);
 
   const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
-  auto write_patched = [&](nlohmann::json j) {
-    j.erase("manifest_crc32");
-    const std::string canon = j.dump();
-    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
-    const std::string text = j.dump(2);
-    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
-  };
   auto old = manifest;  // a map from before the field: no "odom" anywhere
   for (auto& k : old["key_images"]) k.erase("odom");
   write_patched(old);
@@ -441,13 +439,6 @@ TEST_F(VisualMemoryTest, ModeRoundTripsOldMapsAreForwardAndTheOtherModeIsRefused
 
   const auto manifest = nlohmann::json::parse(read(dir_ / "manifest.json"));
   EXPECT_EQ(manifest.at("mode"), "ceiling");
-  auto write_patched = [&](nlohmann::json j) {
-    j.erase("manifest_crc32");
-    const std::string canon = j.dump();
-    j["manifest_crc32"] = crc32(std::vector<char>(canon.begin(), canon.end()));
-    const std::string text = j.dump(2);
-    write(dir_ / "manifest.json", std::vector<char>(text.begin(), text.end()));
-  };
   auto old = manifest;  // a map from before the field
   old.erase("mode");
   write_patched(old);
