@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "memory/detail/binary_io.hpp"
+#include "memory/detail/file_io.hpp"
 
 namespace pepper::core::ceiling {
 
@@ -112,25 +113,15 @@ void save_mosaic(const Mosaic& mosaic, const fs::path& file) {
   // Atomic: a sibling temporary file, synced, renamed over the old one, the folder synced.
   const fs::path dir = file.parent_path().empty() ? fs::path(".") : file.parent_path();
   const fs::path tmp = dir / (file.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) io_error(tmp, "cannot create");
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      ::close(fd);
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      io_error(tmp, "cannot write");
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    io_error(tmp, "cannot sync");
-  }
+  memory::detail::write_file_synced(
+      tmp, reinterpret_cast<const uint8_t*>(text.data()), text.size(),
+      [&](const fs::path& path, const std::string& what) {
+        const int cause = errno;  // io_error reports it; the clean-up must not replace it
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        errno = cause;
+        io_error(path, what);
+      });
   if (::rename(tmp.c_str(), file.c_str()) != 0) {
     std::error_code ec;
     fs::remove(tmp, ec);

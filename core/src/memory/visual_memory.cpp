@@ -16,6 +16,7 @@
 
 #include "core/camera/intrinsics_json.hpp"
 #include "memory/detail/binary_io.hpp"
+#include "memory/detail/file_io.hpp"
 
 namespace pepper::core::memory {
 namespace fs = std::filesystem;
@@ -59,23 +60,7 @@ constexpr const char* kFormatName = "pepper-visual-memory";
 }
 
 void write_file_synced(const fs::path& path, const uint8_t* data, size_t size) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) io_error(path, "cannot create");
-  size_t done = 0;
-  while (done < size) {
-    const ssize_t n = ::write(fd, data + done, size - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      ::close(fd);
-      io_error(path, "write failed");
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0) {
-    ::close(fd);
-    io_error(path, "fsync failed");
-  }
-  if (::close(fd) != 0) io_error(path, "close failed");
+  detail::write_file_synced(path, data, size, io_error);
 }
 
 void fsync_dir(const fs::path& dir) {
