@@ -155,7 +155,8 @@ int run_replay(const ReplayArgs& a) {
     }
     console.line(result.str());
     return replay_exit_code(r);
-  } catch (const std::exception& e) {  // a ConfigError is 2: refused before anything moved
+  } catch (const std::exception& e) {
+    // A ConfigError or a RobotUrlError is 2: refused before anything moved.
     return report_exception(e, 4);
   }
 }

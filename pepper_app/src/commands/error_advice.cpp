@@ -4,6 +4,7 @@
 
 #include "config/app_config.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "session/robot_connection.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
 #include "session/console.hpp"
 #include "session/recording.hpp"
@@ -67,7 +68,10 @@ std::string message_with_next_step(const std::exception& e) {
 int report_exception(const std::exception& e, int code) {
   // Through the console: on a terminal it first clears a progress line of a running session.
   terminal_console().line("pepper_app: error: " + message_with_next_step(e));
-  return dynamic_cast<const ConfigError*>(&e) != nullptr ? 2 : code;
+  // Usage errors, refused before anything moved: a bad setting or a robot URL that names no robot.
+  const bool usage = dynamic_cast<const ConfigError*>(&e) != nullptr ||
+                     dynamic_cast<const RobotUrlError*>(&e) != nullptr;
+  return usage ? 2 : code;
 }
 
 }  // namespace pepper::app

@@ -21,14 +21,14 @@ RobotUrl parse_robot_url(const std::string& text) {
     out.kind = RobotUrl::Kind::kMock;
     out.world_file = text.substr(5);
     if (out.world_file.empty()) {
-      throw std::invalid_argument("robot URL '" + text + "': mock: needs a world file, e.g. "
+      throw RobotUrlError("robot URL '" + text + "': mock: needs a world file, e.g. "
                                   "mock:worlds/robotics_room.yaml");
     }
     out.url = text;
     return out;
   }
   if (text.rfind("tcp://", 0) != 0 && text.rfind("tcps://", 0) != 0) {
-    throw std::invalid_argument("robot URL '" + text +
+    throw RobotUrlError("robot URL '" + text +
                                 "': expected tcp://HOST[:9559], tcps://HOST[:9503] or mock:WORLD");
   }
   try {
@@ -36,7 +36,7 @@ RobotUrl parse_robot_url(const std::string& text) {
     out.kind = u.tls ? RobotUrl::Kind::kTcps : RobotUrl::Kind::kTcp;
     out.url = u.to_string();
   } catch (const std::exception& e) {
-    throw std::invalid_argument("robot URL '" + text + "': " + e.what());
+    throw RobotUrlError("robot URL '" + text + "': " + e.what());
   }
   return out;
 }

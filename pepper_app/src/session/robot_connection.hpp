@@ -16,6 +16,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "naoqi_bridge/mock_bridge.hpp"
@@ -31,7 +32,14 @@ struct RobotUrl {
   std::filesystem::path world_file;  ///< kMock only
 };
 
-/// Parses and normalises a robot URL. Throws std::invalid_argument naming the URL.
+/// A robot URL that names no robot (unknown scheme, `mock:` without a world, a bad port): a usage
+/// error, exit code 2 like a bad --set (docs/errors.md), refused before anything connects.
+class RobotUrlError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+/// Parses and normalises a robot URL. Throws RobotUrlError naming the URL.
 RobotUrl parse_robot_url(const std::string& text);
 
 struct RobotConnectOptions {

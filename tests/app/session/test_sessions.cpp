@@ -382,8 +382,8 @@ TEST(RobotUrl, ParsesAndNormalises) {
   EXPECT_EQ(parse_robot_url("tcp://10.0.0.5").url, "tcp://10.0.0.5:9559");
   EXPECT_EQ(parse_robot_url("tcps://pepper.local").kind, RobotUrl::Kind::kTcps);
   EXPECT_EQ(parse_robot_url("mock:w.yaml").world_file, "w.yaml");
-  EXPECT_THROW(parse_robot_url("http://x"), std::invalid_argument);
-  EXPECT_THROW(parse_robot_url("mock:"), std::invalid_argument);
+  EXPECT_THROW(parse_robot_url("http://x"), RobotUrlError);  // a usage error: exit 2
+  EXPECT_THROW(parse_robot_url("mock:"), RobotUrlError);
 }
 
 // tcps:// logs in as Pepper's user "nao" unless told otherwise, with the password from
