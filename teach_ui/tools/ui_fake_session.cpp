@@ -200,6 +200,8 @@ struct Args {
   std::string scenario = "teach";
   bool exit_on_stdin_eof = false;
   double duration_s = 0.0;
+  double robot_warning_at_s = -1.0;  ///< < 0: never
+  double robot_warning_for_s = 4.0;
 };
 
 Args parse_args(int argc, char** argv) {
@@ -222,9 +224,15 @@ Args parse_args(int argc, char** argv) {
       a.exit_on_stdin_eof = true;
     else if (k == "--duration-s")
       a.duration_s = std::stod(value());
+    else if (k == "--robot-warning-at-s")
+      a.robot_warning_at_s = std::stod(value());
+    else if (k == "--robot-warning-for-s")
+      a.robot_warning_for_s = std::stod(value());
     else if (k == "--help" || k == "-h") {
       std::cout << "usage: ui_fake_session [--port N] [--web-root DIR] [--fps HZ] "
-                   "[--scenario teach|replay|offline] [--exit-on-stdin-eof] [--duration-s S]\n";
+                   "[--scenario teach|replay|offline] [--exit-on-stdin-eof] [--duration-s S]\n"
+                   "       [--robot-warning-at-s S [--robot-warning-for-s D]] (the app's robot\n"
+                   "       warning, renewed at 5 Hz from S for D seconds, then cleared)\n";
       std::exit(0);
     } else {
       throw std::invalid_argument("unknown option " + k);
@@ -389,6 +397,7 @@ class FakeSession {
     const int every = std::max(1, static_cast<int>(args_.fps / 5));  // state at about 5 Hz
     if (tick % every == 0) {
       server_.publish_state({{"camera", {{"fps_hz", args_.fps}, {"latency_ms", 18.0}}}});
+      publish_robot_warning(t_s);
       if (recording_ && tick % (every * 5) == 0) {
         const int index = static_cast<int>(teach_keys_.size());
         server_.publish_image("key/" + std::to_string(index), thumbnail(px));
@@ -405,6 +414,20 @@ class FakeSession {
       }
       publish_teach();
       if (replaying_ || args_.scenario != "teach") publish_replay(t_s, px);
+    }
+  }
+
+  // As the app's supervision does (session/robot_supervision.cpp): the warning renewed while it
+  // holds, then null once.
+  void publish_robot_warning(double t_s) {
+    if (args_.robot_warning_at_s < 0.0 || warning_cleared_) return;
+    if (t_s < args_.robot_warning_at_s) return;
+    if (t_s < args_.robot_warning_at_s + args_.robot_warning_for_s) {
+      server_.publish_state({{"robot_warning",
+                              "MoveFailed: the robot refused the move (safety, fake session)"}});
+    } else {
+      server_.publish_state({{"robot_warning", nullptr}});
+      warning_cleared_ = true;
     }
   }
 
@@ -443,6 +466,7 @@ class FakeSession {
   Scene scene_;
   bool recording_ = false;
   bool replaying_ = false;
+  bool warning_cleared_ = false;  // the robot warning (--robot-warning-at-s) is over
   double v_m_s_ = 0.0;
   double omega_rad_s_ = 0.0;
   double yaw_rad_ = 0.0;

@@ -10,7 +10,8 @@
 // feature overlay drawn over it (coloured pixels; none with "features" unticked); holding
 // the Up arrow sends a drive intent and releasing it a drive_released; clicking STOP sends an
 // estop; the space bar sends an estop; with a finished tour (--scenario replay) the key-image
-// strip, progress and plots show. Screenshots go to --artifacts (git-ignored). Prints
+// strip, progress and plots show; a robot warning the app reports shows in a banner (and the
+// event log) and the banner goes when the app clears it. Screenshots go to --artifacts (git-ignored). Prints
 // "N passed, N failed"; exit status 1 on any failure or when the toolchain is missing.
 import { join } from 'node:path';
 import {
@@ -149,12 +150,25 @@ async function main() {
   server = null;
   browser = null;
   try {
-    server = await startServer(opts.server, [...baseArgs, ...splitArgs(opts['replay-scenario-args'])],
-      { echo: !!opts.echo });
+    // The fake app reports a robot warning (MoveFailed) from 2 s for 4 s, then clears it.
+    server = await startServer(opts.server, [...baseArgs, ...splitArgs(opts['replay-scenario-args']),
+      '--robot-warning-at-s', '2', '--robot-warning-for-s', '4'], { echo: !!opts.echo });
     browser = await launchBrowser({ chromiumPath: opts.chromium });
     const { page } = browser;
     await page.goto(server.url, { waitUntil: 'load' });
     await expectConnected(page);
+
+    await run.step('robot warning banner shows while the app reports one, and goes when it ends', async () => {
+      await page.waitForSelector('#banner-robot-warning:not([hidden])', { timeout: 10000 });
+      const text = await page.textContent('#banner-robot-warning');
+      if (!/Robot warning .*MoveFailed/.test(text)) throw new Error(`banner reads "${text}"`);
+      const file = join(artifacts, 'teach_ui_robot_warning.png');
+      await page.screenshot({ path: file, fullPage: true });
+      await page.waitForSelector('#banner-robot-warning[hidden]', { state: 'attached', timeout: 10000 });
+      const log = await page.textContent('body');
+      if (!/robot warning: MoveFailed/.test(log)) throw new Error('the warning is not in the event log');
+      return file;
+    });
 
     await run.step('replay view shows key strip, progress, thumbnails and plots', async () => {
       await page.waitForFunction(() => document.querySelectorAll('#key-strip .key img[src]').length === 12,
