@@ -1,4 +1,5 @@
 #include "core/navigator/navigator.hpp"
+
 #include "core/navigator/transitions.hpp"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/control/visual_features.hpp"
+#include "core/geometry/line_yaw.hpp"
 
 namespace pepper::core::navigator {
 
@@ -212,6 +214,20 @@ std::vector<std::optional<OdometryPose>> taught_odometry(const memory::VisualMem
 // fix's noise (a few cm laterally, more along the segment) is halved, and two or three located
 // frames remove the drift of a dead-reckoned turn.
 constexpr double kFixGain = 0.5;
+// The heading of the odometry estimate has a sigma (heading_sigma_rad_), the odometry's error
+// model: it grows by kOdometryYawErrorPerRad of every turn and kOdometryYawErrorPerM per metre
+// (Pepper's wheel odometry reads turns a few per cent off; the mock's model: 3 % of the turn and
+// 0.001 rad/s of bias, docs/mock_robot.md "Odometry"), is kPlacedHeadingSigmaRad when a
+// (re)localisation places the estimate at a key image's taught pose, and shrinks with each VNHV
+// fix (whose own heading is good to about kFixHeadingSigmaRad). Where no VNHV fix corrects the
+// estimate, the heading relative to IN from the matched horizontal lines (geometry/line_yaw.hpp)
+// corrects the heading by a Kalman gain, gated at kHeadingGateSigmas.
+constexpr double kOdometryYawErrorPerRad = 0.05;
+constexpr double kOdometryYawErrorPerM = 0.01;
+constexpr double kPlacedHeadingSigmaRad = 0.1;
+constexpr double kFixHeadingSigmaRad = 0.02;
+constexpr double kMinLineYawSigmaRad = 0.005;  // the lines' own sigma, floored: sway, lens
+constexpr double kHeadingGateSigmas = 3.0;
 // Turning on the spot on odometry: yaw rate per radian still to turn, 1/s; and the heading error
 // (rad) beyond which the robot turns on the spot before driving on.
 constexpr double kTurnGain_1_s = 1.5;
@@ -264,6 +280,7 @@ void Navigator::reset() {
   odom_.reset();
   blind_m_ = blind_rad_ = 0.0;
   odom_since_fix_m_ = 1e9;
+  heading_sigma_rad_ = kPlacedHeadingSigmaRad;
   drift_report_pending_ = false;
 }
 
@@ -382,6 +399,7 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
       constexpr double kAgreeM = 1.0;
       if (!X || std::hypot(X->x_m - best.x_m, X->y_m - best.y_m) > kAgreeM) {
         tracker_.set(best, *odom_, report.result.segment->prev);
+        heading_sigma_rad_ = kPlacedHeadingSigmaRad;
       } else {
         tracker_.set(*X, *odom_, report.result.segment->prev);
       }
@@ -593,10 +611,13 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       const OdometryPose in_next{fix->pose.x_m * vnhv_m_per_unit_,
                                  fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
       fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), kFixGain);
+      heading_sigma_rad_ = std::hypot((1.0 - kFixGain) * heading_sigma_rad_,
+                                      kFixGain * kFixHeadingSigmaRad);
       if (seg.next + 1 == static_cast<int>(map_.key_images.size())) {
         final_fix_.emplace(in_next, tel.t_ns);
       }
       odom_since_fix_m_ = 0.0;
+      fixed_this_frame_ = true;
       if (drift_report_pending_) {
         // The first fix after a blind stretch: how far the odometry had drifted.
         tel.drift_corrected_m = fix_correction_->first;
@@ -765,7 +786,9 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
     const std::optional<PathDeviation> d = tracker_.deviation();
     on_taught_spot_turn_ = d && d->in_place;
   }
+  fixed_this_frame_ = false;
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
+  if (!fixed_this_frame_) correct_heading_from_lines(fm, tel);
   if (!omega) {
     omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
     // Turn feed-forward where VNHV has no estimate on the segment (no model, or a model that has
@@ -905,6 +928,10 @@ void Navigator::follow_odometry(const Frame& frame) {
       blind_m_ += moved_m;
       blind_rad_ += std::abs(d.yaw_rad);
     }
+    // The odometry's heading error grows with every turn and every metre (systematic errors:
+    // their bounds add up linearly).
+    heading_sigma_rad_ += kOdometryYawErrorPerRad * std::abs(d.yaw_rad) +
+                          kOdometryYawErrorPerM * moved_m;
   }
   tracker_.predict(*frame.odom);
   odom_ = frame.odom;
@@ -933,6 +960,37 @@ double Navigator::odometry_demand(bool& on_the_spot) {
     demand = w ? *w : -kTurnGain_1_s * d.heading_rad;
   }
   return std::clamp(demand, -max_omega, max_omega);
+}
+
+void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel) {
+  if (!odom_ || !tracker_.usable() || !tracker_.estimate() || !switcher_) return;
+  const int in = switcher_->segment().next;
+  const features::ImageFeatures& k = key(in);
+  const features::TwoViewMatches& tv = fm.two_view(in, k);  // cached: the switching counts' own
+  std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> pairs;
+  pairs.reserve(tv.lines.size());
+  for (const features::LineMatch& m : tv.lines) {
+    const features::LineSegment& a = k.lines[static_cast<size_t>(m.idx_a)];
+    const features::LineSegment& b = fm.current().lines[static_cast<size_t>(m.idx_b)];
+    pairs.push_back({{a.p0_norm, a.p1_norm}, {b.p0_norm, b.p1_norm}});
+  }
+  const auto yaw = geometry::estimate_line_yaw(pairs, options_.matcher.essential.camera_pitch_rad);
+  if (!yaw) return;
+  tel.line_yaw_rad = yaw->yaw_rad;
+  // A one-dimensional Kalman update of the estimate's heading: the line yaw's variance against
+  // the odometry's; a measurement beyond kHeadingGateSigmas of their combined sigma is an outlier
+  // (a mismatched or non-horizontal line that the estimator's consensus kept) and is ignored.
+  const double innovation_rad =
+      std::remainder(tracker_.taught(in).yaw_rad + yaw->yaw_rad - tracker_.estimate()->yaw_rad,
+                     2.0 * M_PI);
+  const double p = heading_sigma_rad_ * heading_sigma_rad_;
+  const double r = std::max(yaw->sigma_rad, kMinLineYawSigmaRad) *
+                   std::max(yaw->sigma_rad, kMinLineYawSigmaRad);
+  if (innovation_rad * innovation_rad > kHeadingGateSigmas * kHeadingGateSigmas * (p + r)) return;
+  const double gain = p / (p + r);
+  tel.line_yaw_correction_rad =
+      tracker_.correct_yaw(tracker_.taught(in).yaw_rad + yaw->yaw_rad, gain);
+  heading_sigma_rad_ = std::sqrt((1.0 - gain) * p);
 }
 
 bool Navigator::odometry_steers() const {

@@ -90,6 +90,13 @@ std::pair<double, double> TaughtPathTracker::correct(const OdometryPose& X_fix, 
   return error;
 }
 
+double TaughtPathTracker::correct_yaw(double yaw_teach_rad, double gain) {
+  if (!X_) return 0.0;
+  const double correction = gain * wrap(yaw_teach_rad - X_->yaw_rad);
+  X_->yaw_rad = wrap(X_->yaw_rad + correction);
+  return correction;
+}
+
 bool TaughtPathTracker::piece_short(int i) const {
   const OdometryPose& a = taught_[static_cast<size_t>(i)];
   const OdometryPose& b = taught_[static_cast<size_t>(i) + 1];

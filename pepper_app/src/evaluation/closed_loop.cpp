@@ -249,6 +249,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
       const nav::Telemetry& tel = step->telemetry;
       smp.dead_reckoning = tel.state == nav::NavState::kDeadReckoning;
       run_.dead_reckoning_frames += smp.dead_reckoning;
+      run_.line_heading_frames += std::isfinite(tel.line_yaw_correction_rad);
       if (tel.reacquired) {
         run_.reacquisitions.push_back({tel.dead_reckoned_m, tel.dead_reckoned_rad, kNaN, kNaN});
       }

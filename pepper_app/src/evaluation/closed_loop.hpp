@@ -152,6 +152,9 @@ struct RunResult {
   /// re-acquisition the distance and turn driven blind and the drift the first VNHV fix after
   /// it corrected (NaN: no fix before the next blind stretch).
   int dead_reckoning_frames = 0;
+  /// Frames where the heading from lines corrected the odometry estimate (no VNHV fix; the
+  /// navigator's line-yaw Kalman update accepted the measurement).
+  int line_heading_frames = 0;
   struct Reacquisition {
     double blind_m = 0.0, blind_rad = 0.0;
     double corrected_m = std::numeric_limits<double>::quiet_NaN();

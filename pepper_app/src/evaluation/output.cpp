@@ -74,6 +74,7 @@ json run_json(const RunResult& r) {
           {"frames_dropped", r.frames_dropped},
           {"lost_frames", r.lost_frames},
           {"dead_reckoning_frames", r.dead_reckoning_frames},
+          {"line_heading_frames", r.line_heading_frames},
           {"reacquisitions", std::move(reacquisitions)},
           {"sim_s", r.sim_s},
           {"wall_s", r.wall_s}};

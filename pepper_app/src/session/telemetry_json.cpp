@@ -63,6 +63,8 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"dead_reckoned_rad", num(t.dead_reckoned_rad)},
       {"reacquired", t.reacquired},
       {"odometry_steered", t.odometry_steered},
+      {"line_yaw_rad", num(t.line_yaw_rad)},
+      {"line_yaw_correction_rad", num(t.line_yaw_correction_rad)},
       {"drift_corrected_m", num(t.drift_corrected_m)},
       {"drift_corrected_rad", num(t.drift_corrected_rad)},
       {"arrival_along_m", num(t.arrival_along_m)},

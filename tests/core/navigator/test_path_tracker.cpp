@@ -112,6 +112,21 @@ TEST(TaughtPathTracker, VisionFixPullsTheEstimateAndReportsTheCorrection) {
   EXPECT_DOUBLE_EQ(u.estimate()->x_m, 0.2);
 }
 
+TEST(TaughtPathTracker, HeadingFixTurnsOnlyTheHeadingAcrossTheWrap) {
+  TaughtPathTracker t(l_path());
+  t.set({0.5, 0.10, 3.10}, {}, 0);
+  // The vision heading is -3.10 rad, 0.083 rad counter-clockwise of 3.10 across +-pi: half of it.
+  const double c = t.correct_yaw(-3.10, 0.5);
+  EXPECT_NEAR(c, 0.5 * (2.0 * M_PI - 6.20), 1e-12);
+  EXPECT_NEAR(std::remainder(t.estimate()->yaw_rad - (3.10 + c), 2.0 * M_PI), 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(t.estimate()->x_m, 0.5);
+  EXPECT_DOUBLE_EQ(t.estimate()->y_m, 0.10);
+  // Without an estimate nothing happens.
+  TaughtPathTracker u(l_path());
+  EXPECT_EQ(u.correct_yaw(1.0, 0.5), 0.0);
+  EXPECT_FALSE(u.estimate());
+}
+
 TEST(TaughtPathTracker, CurvatureOfAnArcPiece) {
   // A piece of a left arc: 0.3 m chord, heading +0.3 rad across it.
   TaughtPathTracker t(Poses{OdometryPose{0, 0, 0}, OdometryPose{0.3, 0.045, 0.3}});

@@ -300,6 +300,10 @@ class Navigator {
   double odometry_demand(bool& on_the_spot);
   /// Whether odometry may steer where VNHV has no estimate: a vision fix is recent enough.
   bool odometry_steers() const;
+  /// Without a VNHV fix this frame: the heading relative to IN from the lines matched with it
+  /// corrects the odometry estimate's heading (a Kalman update against heading_sigma_rad_;
+  /// telemetry line_yaw_*).
+  void correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel);
   /// Whether dead reckoning can drive this frame (StepFacts::can_dead_reckon).
   bool can_dead_reckon() const;
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
@@ -339,6 +343,11 @@ class Navigator {
   /// This frame, VNHV had no estimate of the robot on the segment: no model, or a model that
   /// has not located the current image yet.
   bool vnhv_unlocated_ = true;
+  /// This frame, a VNHV fix corrected the odometry estimate.
+  bool fixed_this_frame_ = false;
+  /// Sigma of the odometry estimate's heading (rad): the odometry's error model (navigator.cpp,
+  /// kOdometryYawErrorPerRad) and the line-yaw Kalman update.
+  double heading_sigma_rad_ = 0.1;
   /// This frame, odometry places the robot on a piece of the taught path that teaching turned on
   /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
   /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.

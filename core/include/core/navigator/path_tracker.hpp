@@ -79,6 +79,10 @@ class TaughtPathTracker {
   /// Pulls X towards a vision fix (teach frame) by `gain` in [0, 1] (1: take the fix). Returns
   /// the distance (m) and |heading| (rad) between the prediction and the fix.
   std::pair<double, double> correct(const OdometryPose& X_fix, double gain);
+  /// Pulls X's heading only towards a vision heading (teach frame, rad) by `gain` in [0, 1]
+  /// (the relative yaw to a key image from lines: geometry/line_yaw.hpp). Returns the signed
+  /// correction (rad); 0 without an estimate.
+  double correct_yaw(double yaw_teach_rad, double gain);
   const std::optional<OdometryPose>& estimate() const { return X_; }
 
   /// The deviation at the current estimate, advancing the piece while the robot is past its

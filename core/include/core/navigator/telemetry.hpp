@@ -101,6 +101,10 @@ struct Telemetry {
   bool reacquired = false;  ///< vision drives again on this frame after dead reckoning
   /// VNHV had no estimate and the odometry's deviation from the taught path steered instead.
   bool odometry_steered = false;
+  /// No VNHV fix this frame, and the lines matched with IN gave the robot's yaw relative to IN
+  /// (geometry/line_yaw.hpp): that yaw (rad, CCW) and the heading correction it made to the
+  /// odometry estimate (rad); NaN otherwise.
+  double line_yaw_rad = kNaN, line_yaw_correction_rad = kNaN;
   /// On the first frame after a blind stretch with a VNHV fix: how far that fix moved the
   /// odometry estimate, the drift corrected at re-acquisition, m and rad (else NaN).
   double drift_corrected_m = kNaN, drift_corrected_rad = kNaN;
