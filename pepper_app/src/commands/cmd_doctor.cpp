@@ -291,8 +291,11 @@ void register_doctor_command(CLI::App& app) {
   cmd->add_option("--camera-seconds", args->camera_seconds,
                   "How long to stream for the camera "
                   "check")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  // The bridge's own limits (QiBridgeOptions::validate), refused by the parser like any range.
   cmd->add_option("--timeout-ms", args->timeout_ms, "Connect and call timeout")
+      ->check(CLI::Range(1, 600000))
       ->capture_default_str();
   cmd->footer(
       "Examples:\n"
