@@ -215,6 +215,10 @@ async function replayStep() {
         { timeout: 10000 });
       const progress = await page.textContent('#progress-text');
       const robot = await page.textContent('#pill-robot');
+      const ending = await page.evaluate(() => {
+        const el = document.getElementById('stop-reason');
+        return { text: el.hidden ? '' : el.textContent, ok: el.classList.contains('ok') };
+      });
       await server.stop();
       const console = /furthest key image (\d+) of (\d+)/.exec(server.stderr());
       const bad = [];
@@ -237,6 +241,11 @@ async function replayStep() {
         if (!done.arrival || !progress.includes(shown[done.arrival.verdict])) {
           bad.push(`progress "${progress}", arrival ${JSON.stringify(done.arrival)}`);
         }
+      }
+      // An arrival is an ending, not a fault: "Finished" in green; any other end "Stopped".
+      const arrived = done.tour_complete && done.arrival && done.arrival.verdict === 'arrived';
+      if (!ending.text.startsWith(arrived ? 'Finished: ' : 'Stopped: ') || ending.ok !== arrived) {
+        bad.push(`stop box "${ending.text}" (green: ${ending.ok}), arrival ${JSON.stringify(done.arrival)}`);
       }
       if (done.key_images !== info.count) bad.push(`replay_done ${done.key_images} key images, map ${info.count}`);
       if (robot === 'robot: connected') bad.push('robot still "connected" after the replay');

@@ -441,11 +441,16 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                            ? std::string("matched")
                            : "IN " + std::to_string(t.overlay.key_index) + " matched");
         // The caption's counts are the navigator's matches with IN before verification; the
-        // legend counts the verified ones drawn: say which is which.
+        // legend counts the verified ones drawn: say which is which. Two lines, so that a
+        // 320-pixel-wide image shows the counts whole. On frames where the navigator drew none
+        // (the end of the tour, a search) the caption says so, or the legend's 0 would
+        // contradict it.
+        const bool drawn = !t.overlay.lines.empty() || !t.overlay.points_px.empty();
         overlay["text"] = nlohmann::json::array(
             {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
-             std::to_string(t.in) + "  matches with IN: lines " + std::to_string(t.n_lines_next) +
-             ", points " + std::to_string(t.n_points_next)});
+                 std::to_string(t.in),
+             "matches with IN: lines " + std::to_string(t.n_lines_next) + ", points " +
+                 std::to_string(t.n_points_next) + (drawn ? "" : " (none drawn)")});
         link.publish_frame(*frame, overlay);
         link.publish_samples({{"t_s", s.t_s},
                               {"v_m_s", s.v_m_s},
