@@ -387,7 +387,7 @@ TEST(AppE2E, HelpExamplesNameFilesThatExist) {
 TEST(AppE2E, BadOptionsRefusedBeforeConnecting) {
   const fs::path dir = fresh_dir("badopt");
   test::AppProcess teach({"teach", "--robot", "http://nowhere", "--map", (dir / "m").string()}, dir, "t");
-  EXPECT_EQ(teach.wait(), 1);
+  EXPECT_EQ(teach.wait(), 2);  // a usage error, refused before anything connects (errors.md)
   EXPECT_NE(teach.err().find("robot URL"), std::string::npos) << teach.both();
   test::AppProcess bad({"teach", "--robot", "mock:" + kWorldFile, "--map", (dir / "m").string(), "--set",
              "robot.frame_timeout_s=0.005"},
