@@ -350,7 +350,12 @@ TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
              "robot.camera_width_px=640", "--set", "robot.camera_height_px=480"},
             dir, "vga");
   EXPECT_EQ(vga.wait(), 2) << vga.both();
-  EXPECT_NE(vga.err().find("drop that setting"), std::string::npos) << vga.both();
+  // Both settings are named, with no generic "fix the value" advice after "drop".
+  EXPECT_NE(vga.err().find("--set robot.camera_width_px=640 --set robot.camera_height_px=480 asks "
+                           "for 640x480: drop those settings"),
+            std::string::npos)
+      << vga.both();
+  EXPECT_EQ(vga.err().find("fix the value"), std::string::npos) << vga.both();
 }
 
 // The examples of every --help name files that exist in the checkout (issue 30: `map build
