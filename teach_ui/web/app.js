@@ -382,13 +382,22 @@
     if ('offline' in patch) drawTopView();
     if ('map_summary' in patch) renderSummary();
     if ('replay' in patch) renderReplay();
-    if ('stop_reason' in patch) {
-      const el = $('stop-reason');
-      el.hidden = !s.stop_reason;
-      el.textContent = s.stop_reason ? `Stopped: ${s.stop_reason}` : '';
-    }
+    if ('stop_reason' in patch || 'replay' in patch) renderStopReason();
     if ('trajectory' in patch || 'taught_path' in patch || 'floor_plan' in patch) drawTopView();
     if ('teach' in patch || 'replay' in patch) renderStrip();
+  }
+
+  // Why the session stopped. A replay that arrived at the end of its tour ended as it should:
+  // "Finished", in green, not a red "Stopped" as for a fault (issue 30: what the operator sees is
+  // true).
+  function renderStopReason() {
+    const s = ui.state;
+    const r = s.replay || {};
+    const arrived = r.outcome === 'tour_complete' && !!r.arrival && r.arrival.verdict === 'arrived';
+    const el = $('stop-reason');
+    el.hidden = !s.stop_reason;
+    el.textContent = s.stop_reason ? `${arrived ? 'Finished' : 'Stopped'}: ${s.stop_reason}` : '';
+    el.classList.toggle('ok', arrived);
   }
 
   function renderTeach() {

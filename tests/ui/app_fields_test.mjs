@@ -10,7 +10,7 @@
 import { spawnSync } from 'node:child_process';
 import { mkdtempSync, rmSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join } from 'node:path';
+import { dirname, join } from 'node:path';
 import {
   HERE, parseArgs, startServer, launchBrowser, ensureDir, makeRunner, expectConnected,
   expectFramesAdvance, holdKey, sleep,
@@ -215,6 +215,10 @@ async function replayStep() {
         { timeout: 10000 });
       const progress = await page.textContent('#progress-text');
       const robot = await page.textContent('#pill-robot');
+      const ending = await page.evaluate(() => {
+        const el = document.getElementById('stop-reason');
+        return { text: el.hidden ? '' : el.textContent, ok: el.classList.contains('ok') };
+      });
       await server.stop();
       const console = /furthest key image (\d+) of (\d+)/.exec(server.stderr());
       const bad = [];
@@ -238,6 +242,11 @@ async function replayStep() {
           bad.push(`progress "${progress}", arrival ${JSON.stringify(done.arrival)}`);
         }
       }
+      // An arrival is an ending, not a fault: "Finished" in green; any other end "Stopped".
+      const arrived = done.tour_complete && done.arrival && done.arrival.verdict === 'arrived';
+      if (!ending.text.startsWith(arrived ? 'Finished: ' : 'Stopped: ') || ending.ok !== arrived) {
+        bad.push(`stop box "${ending.text}" (green: ${ending.ok}), arrival ${JSON.stringify(done.arrival)}`);
+      }
       if (done.key_images !== info.count) bad.push(`replay_done ${done.key_images} key images, map ${info.count}`);
       if (robot === 'robot: connected') bad.push('robot still "connected" after the replay');
       if (bad.length) throw new Error(bad.join('; '));
@@ -255,10 +264,73 @@ async function replayStep() {
   }
 }
 
+/// A replay that can never start (the map taught in robotics_room, the robot in another world):
+/// while it searches, the page shows the best candidate against the threshold, never a -1 index;
+/// at the end it shows "not localised" with the advice of the console's result line, and the app
+/// exits 1 (issue 30, "localisation with a time limit and advice ... same in the UI").
+async function notLocalisedStep() {
+  const elsewhere = join(dirname(opts.world), 'white_corridor.yaml');
+  const server = await startServer(opts.app, ['replay', '--robot', `mock:${elsewhere}`,
+    '--map', mapDir, '--ui-port', '0', '--events', '-', ...QVGA], { echo });
+  const browser = await launchBrowser();
+  const { page } = browser;
+  try {
+    await page.goto(server.url);
+    await expectConnected(page);
+    await run.step('not localised: the search shows the best candidate and the threshold', async () => {
+      const ev = await server.waitForEvent((e) => e.event === 'localising',
+        { timeoutMs: 15000, what: 'a localising event' });
+      await page.waitForFunction(() => /failed/.test(document.getElementById('localisation').textContent),
+        null, { timeout: 10000, polling: 50 });
+      const loc = await page.textContent('#localisation');
+      const progress = await page.textContent('#progress-text');
+      const bad = [];
+      const m = /failed at key image (\d+) \(best candidate, (\d+) of (\d+) verified matches needed\)/.exec(loc);
+      if (!m && !/failed \(no candidate key image\)/.test(loc)) bad.push(`localisation "${loc}"`);
+      else if (Number(m[3]) !== ev.needed) bad.push(`threshold ${m[3]} on the page, ${ev.needed} in the event`);
+      if (/-1/.test(progress) || !/key image -- of/.test(progress)) bad.push(`progress "${progress}"`);
+      if (bad.length) throw new Error(bad.join('; '));
+      return `${loc}; ${progress}`;
+    });
+    await run.step('not localised: the page ends with the outcome and the advice, the app exits 1', async () => {
+      const done = await server.waitForEvent((e) => e.event === 'replay_done',
+        { timeoutMs: 30000, what: 'replay_done' });
+      await page.waitForFunction(() => !!(window.teachUi.state.replay || {}).outcome, null,
+        { timeout: 10000 });
+      const progress = await page.textContent('#progress-text');
+      const stopped = await page.evaluate(() => {
+        const el = document.getElementById('stop-reason');
+        return el.hidden ? '' : el.textContent;
+      });
+      for (let i = 0; i < 100 && server.proc.exitCode === null; i++) await sleep(50);
+      const exit = server.proc.exitCode;
+      const line = /replay not_localised: (.*)/.exec(server.stderr());
+      const bad = [];
+      if (done.outcome !== 'not_localised') bad.push(`outcome ${done.outcome}`);
+      if (!progress.includes('(not_localised)') || /-1/.test(progress)) bad.push(`progress "${progress}"`);
+      if (!line) bad.push(`no result line on the console: ${server.stderr().slice(-300)}`);
+      if (!/place the robot on the taught path/.test(stopped) || !/check the lights/.test(stopped)
+          || !/best candidate: key image \d+/.test(stopped)) {
+        bad.push(`stop reason "${stopped}"`);
+      }
+      if (line && !line[1].startsWith(stopped.replace(/^Stopped: /, ''))) {
+        bad.push(`page "${stopped}", console "${line[1]}"`);
+      }
+      if (exit !== 1) bad.push(`exit code ${exit}`);
+      if (bad.length) throw new Error(bad.join('; '));
+      return `${stopped}; exit ${exit}`;
+    });
+  } finally {
+    await browser.close();
+    await server.stop();
+  }
+}
+
 try {
   if (!existsSync(opts.app)) throw new Error(`no app binary at ${opts.app} (--app)`);
   await run.step('teach by hand in the browser', teachStep);
   await run.step('replay in the browser', replayStep);
+  await run.step('a replay that cannot localise, in the browser', notLocalisedStep);
 } catch (e) {
   console.log(`FAIL setup: ${e.stack || e}`);
 }

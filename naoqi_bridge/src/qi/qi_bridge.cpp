@@ -124,7 +124,14 @@ QiBridge::~QiBridge() {
 
 ConnectionState QiBridge::state() const { return state_.load(); }
 
-std::string QiBridge::describe() const { return session_->describe(); }
+std::string QiBridge::describe() const {
+  // Before connect() the session knows no URL yet; the console's "replay ... on ROBOT" line is
+  // printed then, and "(not connected)" would hide which robot it is about to drive.
+  if (!session_->is_connected()) {
+    return options_.url + (options_.user.empty() ? "" : " (user " + options_.user + ")");
+  }
+  return session_->describe();
+}
 
 std::string QiBridge::tls_fingerprint() const { return session_->peer_certificate_sha256(); }
 

@@ -20,6 +20,8 @@
 #include "commands/commands.hpp"
 #include "commands/doctor_report.hpp"
 #include "commands/doctor_robot_state.hpp"
+#include "commands/error_advice.hpp"
+#include "core/memory/visual_memory.hpp"
 #include "session/known_robots.hpp"
 #include "session/robot_connection.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
@@ -46,6 +48,7 @@ struct DoctorArgs {
   bool trust_new_robot = false;
   double camera_seconds = 3.0;
   int timeout_ms = 5000;
+  std::string map;  ///< --map: check the camera at the size this map was taught at
 };
 
 struct ServiceCheck {
@@ -59,6 +62,22 @@ struct ServiceCheck {
 
 int run_doctor(const DoctorArgs& a) {
   Report report;
+  // The map decides the camera size (issue 30): with --map the camera is checked at the size the
+  // replay of that map will subscribe at, else at the robot's full VGA. Read before connecting,
+  // so that a bad map is refused before anything is asked of the robot.
+  nb::CameraRequest camera_req;  // VGA grey, 15 fps
+  std::string camera_size_why = "the default";
+  if (!a.map.empty()) {
+    try {
+      const auto info = core::memory::read_map_info(a.map);
+      camera_req.width_px = info.camera.width_px;
+      camera_req.height_px = info.camera.height_px;
+      camera_size_why = "the size " + a.map + " was taught at";
+    } catch (const std::exception& e) {
+      std::cerr << "pepper_app doctor: " << message_with_next_step(e) << "\n";
+      return 2;
+    }
+  }
   qi::QiBridgeOptions o;
   o.url = a.robot;
   o.tls_pin_sha256 = a.tls_pin;
@@ -178,8 +197,7 @@ int run_doctor(const DoctorArgs& a) {
     return summarize(report);
   }
   try {
-    nb::CameraRequest req;  // VGA grey, 15 fps
-    bridge.start_camera(req);
+    bridge.start_camera(camera_req);
     int frames = 0;
     std::int64_t first_t = -1;
     std::int64_t last_t = -1;
@@ -198,20 +216,23 @@ int run_doctor(const DoctorArgs& a) {
     const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const double rate = frames / std::max(wall_s, 1e-3);
     const std::string size = std::to_string(w) + "x" + std::to_string(h);
+    const std::string asked =
+        std::to_string(camera_req.width_px) + "x" + std::to_string(camera_req.height_px);
     const std::string detail = std::to_string(frames) + " frames in " + fmt(wall_s, 1) +
                                " s: " + fmt(rate, 1) + " fps received, " + size + " grey, " +
                                fmt(rate * w * h / 1e6, 1) + " MB/s";
     if (frames < 2) {
       report.fail("camera", "no frames streamed (" + detail + ")");
-    } else if (w != 640 || h != 480) {
-      report.fail("camera", "unexpected frame size " + size + " (asked 640x480)");
+    } else if (w != camera_req.width_px || h != camera_req.height_px) {
+      report.fail("camera", "unexpected frame size " + size + " (asked " + asked + ", " +
+                                camera_size_why + ")");
     } else if (last_t <= first_t) {
       report.fail("camera", "robot timestamps do not advance (" + detail + ")");
     } else if (rate < 5.0) {
       report.fail("camera",
                   "too slow for navigation, < 5 fps (" + detail + "; check the WiFi link)");
     } else {
-      report.ok("camera", detail);
+      report.ok("camera", detail + " (" + camera_size_why + ")");
     }
   } catch (const std::exception& e) {
     report.fail("camera", classify(e));
@@ -291,12 +312,19 @@ void register_doctor_command(CLI::App& app) {
   cmd->add_option("--camera-seconds", args->camera_seconds,
                   "How long to stream for the camera "
                   "check")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  // The bridge's own limits (QiBridgeOptions::validate), refused by the parser like any range.
   cmd->add_option("--timeout-ms", args->timeout_ms, "Connect and call timeout")
+      ->check(CLI::Range(1, 600000))
       ->capture_default_str();
+  cmd->add_option("--map", args->map,
+                  "Check the camera at the size this map was taught at (as its replay will "
+                  "subscribe; default: 640x480)");
   cmd->footer(
       "Examples:\n"
       "  pepper_app doctor --robot tcp://10.0.0.5:9559\n"
+      "  pepper_app doctor --robot tcp://10.0.0.5:9559 --map maps/lab  # camera at the map's size\n"
       "  pepper_app doctor --robot tcp://127.0.0.1:9559 --camera-seconds 1  # a local mock-robot\n"
       "  pepper_app doctor --robot tcps://10.0.0.5:9503 --password-file ~/.pepper_pw  # user nao");
   cmd->callback([args] {

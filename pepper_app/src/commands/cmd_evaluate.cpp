@@ -72,7 +72,8 @@ std::set<ev::Disturbance> parse_disturbance_set(const std::string& s) {
 int run_evaluate(const EvaluateArgs& a) {
   ev::EvaluationOptions o;
   if (std::sscanf(a.size.c_str(), "%dx%d", &o.width_px, &o.height_px) != 2) {
-    std::cerr << "pepper_app evaluate: --size must be WIDTHxHEIGHT, got '" << a.size << "'\n";
+    std::cerr << "pepper_app evaluate: --size must be WIDTHxHEIGHT, got '" << a.size
+              << "': give 640x480 or 320x240\n";
     return 2;
   }
   std::vector<core::control::FeatureMode> modes;

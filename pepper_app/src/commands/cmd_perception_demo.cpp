@@ -150,7 +150,8 @@ int run(const PerceptionDemoOptions& o) {
   if (three) label += "  nL3=" + std::to_string(three->n_lines()) + " nP3=" + std::to_string(three->n_points());
   cv::putText(canvas, label, {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.7, {0, 0, 255}, 2, cv::LINE_AA);
   if (!cv::imwrite(o.out, canvas)) {
-    std::cerr << "pepper_app: error: cannot write " << o.out << "\n";
+    std::cerr << "pepper_app: error: cannot write " << o.out
+              << ": check that its folder exists and is writable\n";
     return 1;
   }
   std::cout << "wrote " << o.out << "\n";

@@ -9,6 +9,7 @@
 #include "commands/commands.hpp"
 #include "config/app_config.hpp"
 #include "offline/offline_jobs.hpp"
+#include "session/session_cli.hpp"
 
 namespace pepper::app {
 namespace {
@@ -27,6 +28,9 @@ int run_replay_log(const ReplayLogArgs& a) {
   try {
     const AppConfig config = load_app_config(a.config);
     core::memory::VisualMemory map = core::memory::load_map(a.map);
+    // The frames come from the recording at the map's size: a camera size asked for explicitly
+    // would be ignored, so it is refused as in replay.
+    refuse_camera_size_other_than_map(a.config.file, a.config.sets, config, map.camera);
     const auto camera = load_camera_option(a.camera);
     const Recording rec = read_recording(a.recording, camera ? camera : map.camera, a.fps);
     for (const auto& w : rec.warnings) std::cerr << "pepper_app: warning: " << w << "\n";

@@ -60,13 +60,15 @@ int run_check(const WorldArgs& a) {
 int run_render(const WorldArgs& a) {
   int w = 0, h = 0;
   if (!parse_size(a.size, w, h)) {
-    std::cerr << "pepper_app world render: --size must be WIDTHxHEIGHT, got '" << a.size << "'\n";
+    std::cerr << "pepper_app world render: --size must be WIDTHxHEIGHT, got '" << a.size
+              << "': give e.g. 640x480 or 320x240\n";
     return 2;
   }
   auto world = std::make_shared<const sim::World>(sim::load_world(a.world));
   sim::Pose2D pose = world->scenario.start_pose();
   if (!a.pose.empty() && !parse_pose(a.pose, pose)) {
-    std::cerr << "pepper_app world render: --pose must be x,y,yaw_deg, got '" << a.pose << "'\n";
+    std::cerr << "pepper_app world render: --pose must be x,y,yaw_deg, got '" << a.pose
+              << "': give e.g. 2,1.8,0 (metres, metres, degrees in the world frame)\n";
     return 2;
   }
   sim::MockRobotOptions options;
@@ -79,7 +81,8 @@ int run_render(const WorldArgs& a) {
                          {a.head_yaw_deg * M_PI / 180.0, a.head_pitch_deg * M_PI / 180.0});
   const core::Frame frame = robot.capture(w, h);
   if (!cv::imwrite(a.out, frame.gray)) {
-    std::cerr << "pepper_app world render: cannot write '" << a.out << "'\n";
+    std::cerr << "pepper_app world render: cannot write '" << a.out
+              << "': check that its folder exists and is writable\n";
     return 1;
   }
   const auto gt = robot.ground_truth();
@@ -99,7 +102,8 @@ int run_generate(const WorldArgs& a) {
   try {
     o.kind = sim::world_kind_from_string(a.kind);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "pepper_app world generate: --kind: " << message_with_next_step(e) << "\n";
+    std::cerr << "pepper_app world generate: --kind: " << message_with_next_step(e)
+              << ": pick one of them\n";
     return 2;
   }
   o.poor_view_fraction = a.poor_view_fraction;
@@ -109,7 +113,7 @@ int run_generate(const WorldArgs& a) {
   if (!fs::exists(textures / "pepper_office_a.jpg")) {
     std::cerr << "pepper_app world generate: --textures: '" << a.textures
               << "' does not hold the shipped photographs (worlds/textures/pepper_office_a.jpg "
-                 "...)\n";
+                 "...): give the checkout's worlds/textures folder\n";
     return 2;
   }
   // Relative to the world file's folder, as the shipped worlds write them, when both are in one
@@ -139,7 +143,8 @@ int run_generate(const WorldArgs& a) {
   {
     std::ofstream f(out);
     if (!(f << g.yaml)) {
-      std::cerr << "pepper_app world generate: cannot write '" << a.out << "'\n";
+      std::cerr << "pepper_app world generate: cannot write '" << a.out
+                << "': check that its folder is writable\n";
       return 1;
     }
   }
@@ -215,9 +220,11 @@ void register_world_command(CLI::App& app) {
       ->capture_default_str();
   gen->add_option("--poor-view-fraction", args->poor_view_fraction,
                   "Fraction of seeds whose every turn and end face blank walls (issue 29)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   gen->add_option("--blank-view-prob", args->blank_view_prob,
                   "In the other worlds, chance that one turn's view is blank")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   gen->footer(
       "Example:\n  pepper_app world generate --seed 7 --kind corridor --out gen/c7.yaml\n"

@@ -35,6 +35,7 @@ std::string next_step_for(const std::exception& e) {
     return "give a recording folder written by `pepper_app teach` (MAP.recording) or by "
            "`--record DIR`";
   }
+  if (dynamic_cast<const MapConflictError*>(&e) != nullptr) return "";  // says what to drop
   if (dynamic_cast<const ConfigError*>(&e) != nullptr) {
     return "fix the value given with --set or in the --config file (`pepper_app config doc` "
            "lists every key, its unit and its range)";

@@ -35,6 +35,13 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A setting that conflicts with the map being read (the camera size): its message says which
+/// setting to drop, so no generic "fix the value" advice is added to it.
+class MapConflictError : public ConfigError {
+ public:
+  using ConfigError::ConfigError;
+};
+
 struct RobotConfig {
   int camera_width_px = 640;  ///< kVGA; 320x240 (kQVGA) also supported
   int camera_height_px = 480;

@@ -117,10 +117,21 @@ ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemor
                            const ProgressFn& progress) {
   ReplayLogResult result;
   result.key_image_count = static_cast<int>(map.key_images.size());
+  const cv::Size map_size(map.camera.width_px, map.camera.height_px);
   core::navigator::Navigator navigator(std::move(map), options);
   const std::size_t total = recording.frames.size();
   for (std::size_t i = 0; i < total; ++i) {
     const core::Frame frame = load_frame(recording, i);
+    // Said before the navigator refuses it, with the recording named (issue 30: the map decides
+    // the size; frames of another size cannot be matched).
+    if (i == 0 && frame.gray.size() != map_size) {
+      throw RecordingError(recording.folder.string() + ": frames are " +
+                           std::to_string(frame.gray.cols) + "x" +
+                           std::to_string(frame.gray.rows) + " but the map was taught at " +
+                           std::to_string(map_size.width) + "x" +
+                           std::to_string(map_size.height) +
+                           ": replay-log needs frames of the map's size");
+    }
     const core::navigator::StepResult step = navigator.step(frame);
     result.max_key_image_reached = std::max(result.max_key_image_reached, step.telemetry.in);
     if (step.telemetry.state == core::navigator::NavState::kTourComplete) result.reached_end = true;

@@ -235,6 +235,10 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     int last_in = -2;
     int64_t last_moving_t_ns = -1;
     int best_candidate = -1, best_candidate_count = 0;  // last localisation attempt's best
+    // The best candidate of all attempts, for the not-localised verdict: the robot stands still
+    // while it searches, so the strongest match seen is the best evidence of where it stands
+    // (the last attempt's may be a weaker one, e.g. 2 matches after 4).
+    int best_of_wait = -1, best_of_wait_count = -1;
     int64_t last_localising_event_ns = std::numeric_limits<int64_t>::min() / 2;
     // The last localisation attempt's verdict stays on the page until the next attempt.
     nlohmann::json last_localisation = {{"ok", false}, {"detail", "not yet tried"}};
@@ -329,6 +333,10 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (t.localization_ran) {
         best_candidate = t.localization_best;
         best_candidate_count = t.localization_best_count;
+        if (best_candidate >= 0 && best_candidate_count > best_of_wait_count) {
+          best_of_wait = best_candidate;
+          best_of_wait_count = best_candidate_count;
+        }
         // The operator sees the search: once a second while it fails (frame time).
         if (!has_segment(t) && frame->t_ns - last_localising_event_ns >= 1'000'000'000) {
           last_localising_event_ns = frame->t_ns;
@@ -441,11 +449,16 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                            ? std::string("matched")
                            : "IN " + std::to_string(t.overlay.key_index) + " matched");
         // The caption's counts are the navigator's matches with IN before verification; the
-        // legend counts the verified ones drawn: say which is which.
+        // legend counts the verified ones drawn: say which is which. Two lines, so that a
+        // 320-pixel-wide image shows the counts whole. On frames where the navigator drew none
+        // (the end of the tour, a search) the caption says so, or the legend's 0 would
+        // contradict it.
+        const bool drawn = !t.overlay.lines.empty() || !t.overlay.points_px.empty();
         overlay["text"] = nlohmann::json::array(
             {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
-             std::to_string(t.in) + "  matches with IN: lines " + std::to_string(t.n_lines_next) +
-             ", points " + std::to_string(t.n_points_next)});
+                 std::to_string(t.in),
+             "matches with IN: lines " + std::to_string(t.n_lines_next) + ", points " +
+                 std::to_string(t.n_points_next) + (drawn ? "" : " (none drawn)")});
         link.publish_frame(*frame, overlay);
         link.publish_samples({{"t_s", s.t_s},
                               {"v_m_s", s.v_m_s},
@@ -504,8 +517,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (never_localised) {
         end_with("not_localised",
                  "not localised after " + format_s(options.give_up_not_localised_s) +
-                     " s (best candidate: key image " + std::to_string(best_candidate) + " with " +
-                     std::to_string(best_candidate_count) + " verified matches): place the "
+                     " s (best candidate: key image " + std::to_string(best_of_wait) + " with " +
+                     std::to_string(std::max(0, best_of_wait_count)) + " verified matches): place the "
                      "robot on the taught path near a key image facing the taught direction, "
                      "check the lights, and check that the map belongs to this place");
         break;

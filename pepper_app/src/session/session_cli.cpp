@@ -107,19 +107,25 @@ naoqi_bridge::CameraRequest camera_request(const AppConfig& config) {
 
 namespace {
 
-/// Where the camera size was set explicitly ("--set" or the --config file), or "" when it is the
-/// default.
-std::string explicit_camera_size_source(const CommonSessionArgs& args) {
-  for (const auto& s : args.sets) {
+/// Where the camera size was set explicitly (every such "--set", else the --config file), or ""
+/// when it is the default; `*count` settings.
+std::string explicit_camera_size_source(const std::string& config_file,
+                                        const std::vector<std::string>& sets, int* count) {
+  std::string out;
+  *count = 0;
+  for (const auto& s : sets) {
     if (s.rfind("robot.camera_width_px=", 0) == 0 || s.rfind("robot.camera_height_px=", 0) == 0) {
-      return "--set " + s;
+      out += (out.empty() ? "--set " : " --set ") + s;
+      ++*count;
     }
   }
-  if (!args.config_file.empty()) {
-    const nlohmann::json tree = read_config_file(args.config_file);
+  if (!out.empty()) return out;
+  *count = 1;
+  if (!config_file.empty()) {
+    const nlohmann::json tree = read_config_file(config_file);
     if (tree.is_object() && tree.contains("robot") && tree["robot"].is_object() &&
         (tree["robot"].contains("camera_width_px") || tree["robot"].contains("camera_height_px"))) {
-      return "robot.camera_width_px/camera_height_px in " + args.config_file;
+      return "robot.camera_width_px/camera_height_px in " + config_file;
     }
   }
   return "";
@@ -127,19 +133,28 @@ std::string explicit_camera_size_source(const CommonSessionArgs& args) {
 
 }  // namespace
 
+void refuse_camera_size_other_than_map(const std::string& config_file,
+                                       const std::vector<std::string>& sets,
+                                       const AppConfig& config,
+                                       const core::CameraIntrinsics& map_camera) {
+  const int w = config.robot.camera_width_px, h = config.robot.camera_height_px;
+  if (w == map_camera.width_px && h == map_camera.height_px) return;
+  int settings = 0;
+  const std::string source = explicit_camera_size_source(config_file, sets, &settings);
+  if (!source.empty()) {
+    throw MapConflictError("the map was taught at " + std::to_string(map_camera.width_px) + "x" +
+                           std::to_string(map_camera.height_px) + " but " + source +
+                           " asks for " + std::to_string(w) + "x" + std::to_string(h) +
+                           (settings > 1 ? ": drop those settings" : ": drop that setting") +
+                           " (the map decides the camera size)");
+  }
+}
+
 naoqi_bridge::CameraRequest camera_request_for_map(const CommonSessionArgs& args,
                                                    const AppConfig& config,
                                                    const core::CameraIntrinsics& map_camera) {
   naoqi_bridge::CameraRequest r = camera_request(config);
-  const bool same = r.width_px == map_camera.width_px && r.height_px == map_camera.height_px;
-  if (same) return r;
-  const std::string source = explicit_camera_size_source(args);
-  if (!source.empty()) {
-    throw ConfigError("the map was taught at " + std::to_string(map_camera.width_px) + "x" +
-                      std::to_string(map_camera.height_px) + " but " + source + " asks for " +
-                      std::to_string(r.width_px) + "x" + std::to_string(r.height_px) +
-                      ": drop that setting (the map decides the camera size)");
-  }
+  refuse_camera_size_other_than_map(args.config_file, args.sets, config, map_camera);
   r.width_px = map_camera.width_px;
   r.height_px = map_camera.height_px;
   return r;

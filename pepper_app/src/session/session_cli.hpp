@@ -92,6 +92,14 @@ core::NavMode parse_mode(const std::string& text);
 /// is missing; returns for forward mode. `command` names the command in the message.
 void refuse_unimplemented_mode(core::NavMode mode, const std::string& command);
 
+/// The map decides the camera size (issue 30): throws ConfigError, naming the setting to drop,
+/// when a --set in `sets` or the `config_file` explicitly asks for a size other than the map's;
+/// returns when the size is the map's or only the default differs.
+void refuse_camera_size_other_than_map(const std::string& config_file,
+                                       const std::vector<std::string>& sets,
+                                       const AppConfig& config,
+                                       const core::CameraIntrinsics& map_camera);
+
 /// The camera request for replaying a map taught with `map_camera`: the map decides the size
 /// (the rest as camera_request). Throws ConfigError, naming the setting to drop, when a --set or
 /// the --config file explicitly asks for another size.

@@ -27,9 +27,12 @@ inline const std::string kPepperAppBinary =
 /// A running pepper_app subprocess with stdout/stderr in DIR/NAME.stdout and DIR/NAME.stderr.
 class AppProcess {
  public:
+  /// `cwd`: the working folder of the process (default: the test's), for commands with
+  /// relative paths as an operator types them.
   AppProcess(std::vector<std::string> args, const std::filesystem::path& dir,
-             const std::string& name)
-      : out_(dir / (name + ".stdout")), err_(dir / (name + ".stderr")) {
+             const std::string& name, const std::filesystem::path& cwd = {})
+      : out_(std::filesystem::absolute(dir / (name + ".stdout"))),
+        err_(std::filesystem::absolute(dir / (name + ".stderr"))) {
     args.insert(args.begin(), kPepperAppBinary);
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
@@ -39,6 +42,7 @@ class AppProcess {
     posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
     posix_spawn_file_actions_addopen(&fa, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&fa, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&fa, cwd.c_str());  // after the opens
     const int rc =
         posix_spawn(&pid_, kPepperAppBinary.c_str(), &fa, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&fa);

@@ -61,7 +61,8 @@ struct DoctorRun {
 };
 
 DoctorRun run_doctor_against(const std::vector<std::string>& mock_options,
-                             const std::string& name) {
+                             const std::string& name,
+                             const std::vector<std::string>& doctor_options = {}) {
   const fs::path dir = fresh_dir(name);
   std::vector<std::string> args = {"mock-robot", "--listen", "tcp://127.0.0.1:0"};
   args.insert(args.end(), mock_options.begin(), mock_options.end());
@@ -72,7 +73,9 @@ DoctorRun run_doctor_against(const std::vector<std::string>& mock_options,
     r.all = mock.both();
     return r;
   }
-  test::AppProcess doctor({"doctor", "--robot", url, "--camera-seconds", "0.5"}, dir, "doctor");
+  test::AppProcess doctor(
+      test::cat({"doctor", "--robot", url, "--camera-seconds", "0.5"}, doctor_options), dir,
+      "doctor");
   r.code = doctor.wait(std::chrono::seconds(60));
   r.out = doctor.out();
   r.all = doctor.both() + "\nmock:\n" + mock.both();
@@ -129,6 +132,26 @@ TEST(DoctorE2E, AReadyRobotPassesAndOptionsChangeWhatIsReported) {
   EXPECT_EQ(line_of(other.out, "naoqi version").rfind("WARN", 0), 0u) << other.out;
   EXPECT_TRUE(has(line_of(other.out, "naoqi version"), "2.1.4.13")) << other.out;
   EXPECT_EQ(line_of(other.out, "battery").rfind("WARN", 0), 0u) << other.out;
+}
+
+// Issue 30, "the map decides the camera size": with --map, doctor checks the camera at the size
+// the map was taught at (as its replay will subscribe), and says so; without, at VGA.
+TEST(DoctorE2E, WithAMapTheCameraIsCheckedAtTheMapsSize) {
+  const fs::path dir = fresh_dir("map");
+  test::AppProcess teach({"teach", "--robot",
+                          "mock:" + std::string(PEPPER_SOURCE_DIR) + "/worlds/robotics_room.yaml",
+                          "--map", (dir / "qvga").string(), "--max-distance", "0.5", "--set",
+                          "robot.camera_width_px=320", "--set", "robot.camera_height_px=240"},
+                         dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+  const DoctorRun with_map =
+      run_doctor_against({"--autonomous-life", "disabled"}, "with_map", {"--map", (dir / "qvga").string()});
+  const std::string camera = line_of(with_map.out, "camera");
+  EXPECT_EQ(camera.rfind("OK", 0), 0u) << with_map.all;
+  EXPECT_TRUE(has(camera, "320x240 grey")) << camera;
+  EXPECT_TRUE(has(camera, "the size " + (dir / "qvga").string() + " was taught at")) << camera;
+  const DoctorRun without = run_doctor_against({"--autonomous-life", "disabled"}, "without_map");
+  EXPECT_TRUE(has(line_of(without.out, "camera"), "640x480 grey")) << without.all;
 }
 
 TEST(DoctorE2E, MissingServicesGiveWarningsNamingThem) {

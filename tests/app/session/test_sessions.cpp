@@ -239,6 +239,33 @@ TEST(ReplaySessionSafety, NotLocalisedGivesUpWithAdvice) {
   EXPECT_LE(localising, 3);
 }
 
+// The not-localised verdict names the best candidate of the whole wait, not the last attempt's
+// (the robot stood still: 9 matches with key image 3 early on are better evidence than 2 with key
+// image 1 at the end).
+TEST(ReplaySessionSafety, NotLocalisedNamesTheBestCandidateOfTheWait) {
+  RobotConnection robot = open_robot(kWorld, {});
+  SessionLink link(nullptr, nullptr);
+  ReplaySessionOptions o = replay_options();
+  o.max_frames = 0;
+  o.give_up_not_localised_s = 2.0;
+  int n = 0;
+  const ReplayResult r =
+      run_replay_session(robot, dummy_map(robot), o, link, [&](const core::Frame& f) {
+        const bool early = n++ < 10;
+        nav::StepResult s;
+        s.command = {0.0, 0.0, true, nav::StopReason::kNotLocalized};
+        s.telemetry.t_ns = f.t_ns;
+        s.telemetry.localization_ran = true;
+        s.telemetry.localization_best = early ? 3 : 1;
+        s.telemetry.localization_best_count = early ? 9 : 2;
+        return s;
+      });
+  EXPECT_EQ(r.outcome, "not_localised");
+  EXPECT_NE(r.detail.find("best candidate: key image 3 with 9 verified matches"),
+            std::string::npos)
+      << r.detail;
+}
+
 // Stopped for any reason after driving (lost features, overdue segment ...) for longer than the
 // give-up time: the replay ends as "lost" with the base stopped.
 TEST(ReplaySessionSafety, StoppedAfterDrivingGivesUp) {
