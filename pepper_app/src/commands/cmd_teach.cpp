@@ -69,6 +69,9 @@ void write_command_log(const RobotConnection& robot, const std::string& file) {
   }
 }
 
+// teach --overwrite replaces the old map only with a tour at least this long (m).
+constexpr double kMinReplacingTourM = 0.1;
+
 int run_teach(const TeachArgs& a) {
   const fs::path map_dir(a.map);
   const bool map_exists =
@@ -134,8 +137,24 @@ int run_teach(const TeachArgs& a) {
                                "button or Ctrl-C"));
     const TeachResult r = run_teach_session(robot, o, link);
     write_command_log(robot, a.mock_command_log);
+    bool kept_old = false;
     if (!previous.empty()) {
-      if (r.map_saved) {
+      // A tour of a few centimetres (Ctrl-C or Finish before the robot drove) is no tour: it
+      // must not cost the operator the map it was to replace.
+      const double new_m = std::isfinite(r.map_length_m) ? r.map_length_m : r.distance_m;
+      if (r.map_saved && new_m < kMinReplacingTourM) {
+        fs::path aside = map_dir;
+        aside += ".short";
+        fs::remove_all(aside);
+        fs::rename(map_dir, aside);
+        fs::rename(previous, map_dir);
+        kept_old = true;
+        std::ostringstream os;
+        os << "teach: the new map covers " << std::fixed << std::setprecision(2) << new_m
+           << " m (under " << kMinReplacingTourM << " m): the old map stays in " << map_dir.string()
+           << "; the new one is kept in " << aside.string();
+        console.line(os.str());
+      } else if (r.map_saved) {
         fs::remove_all(previous);
       } else if (!fs::exists(map_dir)) {
         fs::rename(previous, map_dir);
@@ -155,7 +174,7 @@ int run_teach(const TeachArgs& a) {
         result << " and " << std::fixed << std::setprecision(2) << r.map_length_m
                << std::defaultfloat << " m";
       }
-      result << " saved to " << a.map;
+      result << " saved to " << (kept_old ? a.map + ".short" : a.map);
     }
     console.line(result.str());
     if (!r.error.empty()) {
@@ -163,7 +182,7 @@ int run_teach(const TeachArgs& a) {
       return report_error(r.error + (step.empty() ? "" : ": " + step));
     }
     if (r.outcome == "interrupted") return 130;
-    return r.map_saved ? 0 : 1;
+    return r.map_saved && !kept_old ? 0 : 1;
   } catch (const std::exception& e) {
     if (!previous.empty() && !fs::exists(map_dir)) {  // failed before a new map could be saved
       std::error_code ec;
@@ -191,7 +210,8 @@ void register_teach_command(CLI::App& app) {
       ->required();
   cmd->add_flag("--overwrite", args->overwrite,
                 "Replace the map in --map; the old one waits in MAP.previous until the new one "
-                "is saved (and comes back if none is)");
+                "is saved (and comes back if none is, or if the new tour is under 0.1 m: that one is "
+                "kept in MAP.short)");
   cmd->add_option("--recording", args->recording,
                   "Recording folder (default: MAP.recording, or MAP.recording.N if taken)");
   cmd->add_flag("--scripted", args->scripted,

@@ -332,7 +332,16 @@ TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
   test::AppProcess replaced(teach_args({"--overwrite"}), dir, "replaced");
   EXPECT_EQ(replaced.wait(), 0) << replaced.both();
   EXPECT_FALSE(fs::exists(dir / "map.previous"));
-  EXPECT_NO_THROW(core::memory::load_map(map));
+  const auto replacement = core::memory::load_map(map);
+
+  // A teach stopped before the robot drove (two frames: a few centimetres) does not replace it:
+  // the old map stays, the short one is kept aside, exit 1 (no usable map).
+  test::AppProcess tiny(teach_args({"--overwrite", "--max-frames", "2"}), dir, "tiny");
+  EXPECT_EQ(tiny.wait(), 1) << tiny.both();
+  EXPECT_NE(tiny.err().find("the old map stays in"), std::string::npos) << tiny.both();
+  EXPECT_FALSE(fs::exists(dir / "map.previous"));
+  EXPECT_TRUE(fs::exists(dir / "map.short"));
+  EXPECT_EQ(core::memory::load_map(map).key_images.size(), replacement.key_images.size());
 
   // Replay with the default (VGA) configuration: the QVGA map decides, and says so.
   test::AppProcess replay({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--max-frames", "20"},
