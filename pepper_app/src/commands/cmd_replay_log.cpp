@@ -39,6 +39,11 @@ int run_replay_log(const ReplayLogArgs& a) {
         replay_log(rec, std::move(map), config.navigator_options(),
                    [&](std::size_t done, std::size_t total) { progress.update(done, total); });
     progress.finish();
+    if (result.downscale > 1) {
+      std::cerr << "replay-log: the recording's frames are " << result.downscale
+                << " times the map's size (" << result.frames.size()
+                << " frames): each was scaled down to the map's by pixel-area averaging\n";
+    }
     if (!a.quiet) {
       std::cout << "frame  state          IP  IN INN  v_m_s  omega_rad_s  stop_reason\n";
       for (const auto& f : result.frames) {

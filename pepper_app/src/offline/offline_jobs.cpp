@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include <opencv2/imgproc.hpp>
+
 #include "core/mapping/drive_odometer.hpp"
 #include "session/telemetry_json.hpp"
 
@@ -121,16 +123,28 @@ ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemor
   core::navigator::Navigator navigator(std::move(map), options);
   const std::size_t total = recording.frames.size();
   for (std::size_t i = 0; i < total; ++i) {
-    const core::Frame frame = load_frame(recording, i);
-    // Said before the navigator refuses it, with the recording named (issue 30: the map decides
-    // the size; frames of another size cannot be matched).
+    core::Frame frame = load_frame(recording, i);
     if (i == 0 && frame.gray.size() != map_size) {
-      throw RecordingError(recording.folder.string() + ": frames are " +
-                           std::to_string(frame.gray.cols) + "x" +
-                           std::to_string(frame.gray.rows) + " but the map was taught at " +
-                           std::to_string(map_size.width) + "x" +
-                           std::to_string(map_size.height) +
-                           ": replay-log needs frames of the map's size");
+      // Issue 30: the map decides the size, and only what cannot be matched is refused. A
+      // recording k times the map's size in both directions is the same view at more pixels.
+      const int k = frame.gray.cols / std::max(1, map_size.width);
+      if (k >= 2 && frame.gray.cols == k * map_size.width && frame.gray.rows == k * map_size.height) {
+        result.downscale = k;
+      } else {
+        throw RecordingError(recording.folder.string() + ": frames are " +
+                             std::to_string(frame.gray.cols) + "x" +
+                             std::to_string(frame.gray.rows) + " but the map was taught at " +
+                             std::to_string(map_size.width) + "x" +
+                             std::to_string(map_size.height) +
+                             ": replay-log needs frames of the map's size or a whole multiple of "
+                             "it; replay a recording of this camera size against a map taught "
+                             "at it");
+      }
+    }
+    if (result.downscale > 1 && frame.gray.size() != map_size) {
+      cv::Mat small;
+      cv::resize(frame.gray, small, map_size, 0, 0, cv::INTER_AREA);
+      frame.gray = small;
     }
     const core::navigator::StepResult step = navigator.step(frame);
     result.max_key_image_reached = std::max(result.max_key_image_reached, step.telemetry.in);

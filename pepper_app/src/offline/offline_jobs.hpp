@@ -44,11 +44,16 @@ struct ReplayLogResult {
   bool reached_end = false;        ///< the navigator reported the tour complete
   int max_key_image_reached = -1;  ///< largest IN seen
   int key_image_count = 0;
+  /// The recording's frames were this many times the map's size in each direction and were
+  /// scaled down to it (1: used as recorded).
+  int downscale = 1;
   nlohmann::json to_json() const;  ///< {"summary": {...}, "frames": [...]}
 };
 
-/// Runs a Navigator over the recording's frames (no robot). Throws RecordingError / MapError /
-/// std::invalid_argument (frame size differs from the map's) with a clear message.
+/// Runs a Navigator over the recording's frames (no robot). Frames an integer number of times
+/// the map's size in both directions (a VGA recording, a QVGA map) are scaled down to it by
+/// pixel-area averaging, as the camera's own lower resolution delivers them; any other size is
+/// refused. Throws RecordingError / MapError / std::invalid_argument with a clear message.
 ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemory map,
                            const core::navigator::NavigatorOptions& options,
                            const ProgressFn& progress = {});

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <optional>
 
+#include <opencv2/imgproc.hpp>
+
 #include "naoqi_bridge/mock_bridge.hpp"
 #include "sim/mock_robot.hpp"
 #include "sim/teach_driver.hpp"
@@ -94,6 +96,45 @@ TEST_F(OfflineJobsData, MapBuildThenReplayLogOfTheSameFramesReachesTheEnd) {
   const auto json = result.to_json();
   EXPECT_EQ(json["summary"]["frames"], 150);
   EXPECT_EQ(json["frames"].size(), 150u);
+}
+
+// Issue 30: the map decides the size, and only what cannot be matched is refused. The same
+// drive at twice the size (each QVGA frame's pixels doubled: area averaging gives them back
+// exactly) replays against the QVGA map as the QVGA frames do; 1.5 times the size is refused.
+TEST_F(OfflineJobsData, ReplayLogScalesAWholeMultipleOfTheMapsSizeAndRefusesOthers) {
+  const Recording rec = read_recording(tmp_->path() / "rec", std::nullopt);
+  const auto map = build_map_from_recording(rec, {}, false, "{}", {});
+  auto rescaled = [&](const std::string& name, double factor) {
+    const auto folder = tmp_->path() / name;
+    {
+      RecordingWriter writer(folder, rec.camera.scaled_to(static_cast<int>(320 * factor),
+                                                          static_cast<int>(240 * factor)),
+                             "test");
+      for (std::size_t i = 0; i < rec.frames.size(); ++i) {
+        core::Frame f = load_frame(rec, i);
+        cv::Mat big;
+        cv::resize(f.gray, big, cv::Size(), factor, factor, cv::INTER_NEAREST);
+        f.gray = big;
+        writer.append(f, rec.frames[i].v_m_s, rec.frames[i].omega_rad_s);
+      }
+    }
+    return read_recording(folder, std::nullopt);
+  };
+  const ReplayLogResult same = replay_log(rec, map, {});
+  const ReplayLogResult vga = replay_log(rescaled("rec_vga", 2.0), map, {});
+  EXPECT_EQ(same.downscale, 1);
+  EXPECT_EQ(vga.downscale, 2);
+  ASSERT_EQ(vga.frames.size(), same.frames.size());
+  EXPECT_TRUE(vga.reached_end);
+  for (std::size_t i = 0; i < vga.frames.size(); ++i) {
+    EXPECT_EQ(vga.frames[i].command.omega_rad_s, same.frames[i].command.omega_rad_s) << i;
+  }
+  try {
+    (void)replay_log(rescaled("rec_odd", 1.5), map, {});
+    FAIL() << "480x360 frames against a 320x240 map were not refused";
+  } catch (const RecordingError& e) {
+    EXPECT_NE(std::string(e.what()).find("480x360"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(OfflineJobsData, EveryFrameKeyTakesAllImages) {
