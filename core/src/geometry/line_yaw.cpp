@@ -137,28 +137,30 @@ std::optional<LineYaw> estimate_line_yaw(const std::vector<std::pair<NormSegment
   // f_i' near zero: it agrees with almost any yaw and must not outvote the lines that pin it
   // (counting lines did, on Pepper's key images).
   std::vector<double> var(static_cast<size_t>(n));
+  const double e2 = options.endpoint_sigma * options.endpoint_sigma;
   for (int i = 0; i < n; ++i) {
     const Usable& u = use[static_cast<size_t>(i)];
     const double la2 = u.length_a * u.length_a, lb2 = u.length_b * u.length_b;
-    const double e2 = options.endpoint_sigma * options.endpoint_sigma;
     var[static_cast<size_t>(i)] = e2 * (1.0 / std::max(la2, 1e-12) + 1.0 / std::max(lb2, 1e-12)) +
                                   options.sway_sigma_rad * options.sway_sigma_rad;
   }
-  auto f_of = [&](int i, double yaw, double* df) {
+  // f_i and f_i' at the yaw whose cosine and sine are cy, sy (computed once per yaw: support()
+  // evaluates every line at every proposal).
+  auto f_of = [&](int i, double cy, double sy, double* df) {
     const Usable& u = use[static_cast<size_t>(i)];
     const cv::Vec3d& nb = u.b.n;
     const double a = nb[0] * u.d_a[0] + nb[2] * u.d_a[2], b = nb[0] * u.d_a[2] - nb[2] * u.d_a[0];
-    const double c = std::cos(yaw), s = std::sin(yaw);
-    if (df) *df = -s * a + c * b;
-    return c * a + s * b;
+    *df = -sy * a + cy * b;
+    return cy * a + sy * b;
   };
   const double gate2 = options.gate_sigmas * options.gate_sigmas;
   // Inliers of a yaw (|f_i| within gate_sigmas of its noise) and their information.
   auto support = [&](double yaw, std::vector<int>* inliers) {
+    const double cy = std::cos(yaw), sy = std::sin(yaw);
     double sum = 0.0;
     for (int i = 0; i < n; ++i) {
       double df = 0.0;
-      const double f = f_of(i, yaw, &df);
+      const double f = f_of(i, cy, sy, &df);
       if (f * f <= gate2 * var[static_cast<size_t>(i)]) {
         sum += df * df / var[static_cast<size_t>(i)];
         if (inliers) inliers->push_back(i);
@@ -184,9 +186,10 @@ std::optional<LineYaw> estimate_line_yaw(const std::vector<std::pair<NormSegment
   double yaw = best_yaw;
   for (int it = 0; it < 6; ++it) {
     double jtj = 0.0, jtr = 0.0;
+    const double cy = std::cos(yaw), sy = std::sin(yaw);
     for (const int i : inliers) {
       double df = 0.0;
-      const double f = f_of(i, yaw, &df);
+      const double f = f_of(i, cy, sy, &df);
       jtj += df * df / var[static_cast<size_t>(i)];
       jtr += df * f / var[static_cast<size_t>(i)];
     }

@@ -1,5 +1,4 @@
 #include "core/navigator/navigator.hpp"
-
 #include "core/navigator/transitions.hpp"
 
 #include <algorithm>
@@ -216,8 +215,8 @@ std::vector<std::optional<OdometryPose>> taught_odometry(const memory::VisualMem
 constexpr double kFixGain = 0.5;
 // The heading of the odometry estimate has a sigma (heading_sigma_rad_), the odometry's error
 // model: it grows by kOdometryYawErrorPerRad of every turn and kOdometryYawErrorPerM per metre
-// (Pepper's wheel odometry reads turns a few per cent off; the mock's model: 3 % of the turn and
-// 0.001 rad/s of bias, docs/mock_robot.md "Odometry"), is kPlacedHeadingSigmaRad when a
+// (margins above the mock's model of wheel odometry, 3 % of the turn and 0.001 rad/s of bias,
+// docs/mock_robot.md "Odometry"; not measured on a real Pepper), is kPlacedHeadingSigmaRad when a
 // (re)localisation places the estimate at a key image's taught pose, and shrinks with each VNHV
 // fix (whose own heading is good to about kFixHeadingSigmaRad). Where no VNHV fix corrects the
 // estimate, the heading relative to IN from the matched horizontal lines (geometry/line_yaw.hpp)
@@ -980,16 +979,15 @@ void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry
   // A one-dimensional Kalman update of the estimate's heading: the line yaw's variance against
   // the odometry's; a measurement beyond kHeadingGateSigmas of their combined sigma is an outlier
   // (a mismatched or non-horizontal line that the estimator's consensus kept) and is ignored.
+  const double measured_yaw_rad = tracker_.taught(in).yaw_rad + yaw->yaw_rad;  // teach frame
   const double innovation_rad =
-      std::remainder(tracker_.taught(in).yaw_rad + yaw->yaw_rad - tracker_.estimate()->yaw_rad,
-                     2.0 * M_PI);
+      std::remainder(measured_yaw_rad - tracker_.estimate()->yaw_rad, 2.0 * M_PI);
   const double p = heading_sigma_rad_ * heading_sigma_rad_;
-  const double r = std::max(yaw->sigma_rad, kMinLineYawSigmaRad) *
-                   std::max(yaw->sigma_rad, kMinLineYawSigmaRad);
+  const double sigma_r = std::max(yaw->sigma_rad, kMinLineYawSigmaRad);
+  const double r = sigma_r * sigma_r;
   if (innovation_rad * innovation_rad > kHeadingGateSigmas * kHeadingGateSigmas * (p + r)) return;
   const double gain = p / (p + r);
-  tel.line_yaw_correction_rad =
-      tracker_.correct_yaw(tracker_.taught(in).yaw_rad + yaw->yaw_rad, gain);
+  tel.line_yaw_correction_rad = tracker_.correct_yaw(measured_yaw_rad, gain);
   heading_sigma_rad_ = std::sqrt((1.0 - gain) * p);
 }
 

@@ -31,7 +31,8 @@
 // there is no estimate. Reported residual of a match (rms_residual_rad, line_yaw_residual_rad):
 // the dihedral angle between b's plane and the plane through the camera centre, b's midpoint and
 // the predicted vanishing point R_y(yaw) d_a, about the image angle between the segment and the
-// direction from its midpoint to that point (defined when the vanishing point is at infinity). Deterministic, pure; too few usable or agreeing matches: nullopt.
+// direction from its midpoint to that point (defined when the vanishing point is at infinity).
+// Deterministic, pure; too few usable or agreeing matches: nullopt.
 
 #include <optional>
 #include <string>
