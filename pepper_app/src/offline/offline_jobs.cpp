@@ -141,7 +141,10 @@ ReplayLogResult replay_log(const Recording& recording, core::memory::VisualMemor
                              "at it");
       }
     }
-    if (result.downscale > 1 && frame.gray.size() != map_size) {
+    // Only frames of the scaled size are scaled: one of any other size reaches the navigator as it
+    // is and is refused there, naming its size.
+    if (result.downscale > 1 && frame.gray.cols == result.downscale * map_size.width &&
+        frame.gray.rows == result.downscale * map_size.height) {
       cv::Mat small;
       cv::resize(frame.gray, small, map_size, 0, 0, cv::INTER_AREA);
       frame.gray = small;
