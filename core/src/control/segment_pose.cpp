@@ -1,5 +1,6 @@
 #include "core/control/segment_pose.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -248,19 +249,25 @@ std::optional<SegmentModel> build_segment_model(const PlanarPose& prev_in_next,
 
 std::optional<PlanarFix> planar_resection(const std::vector<cv::Vec3d>& X_next,
                                           const std::vector<cv::Point2d>& x_cur, double focal_px,
-                                          const SegmentPoseOptions& options) {
+                                          const SegmentPoseOptions& options,
+                                          const PosePrior* prior) {
   check_inputs(focal_px, options, "planar_resection");
   if (X_next.size() != x_cur.size()) {
     throw std::invalid_argument("planar_resection: " + std::to_string(X_next.size()) +
                                 " points but " + std::to_string(x_cur.size()) + " observations");
   }
+  if (prior && !(prior->sigma_x > 0.0 && prior->sigma_y > 0.0 && prior->sigma_yaw_rad > 0.0 &&
+                 prior->gate_chi2 > 0.0)) {
+    throw std::invalid_argument("planar_resection: the prior's sigmas and gate must be > 0");
+  }
   const int n = static_cast<int>(X_next.size());
   if (n < options.min_points) return std::nullopt;
   const double thr = options.max_reprojection_px / focal_px;
-  auto inliers_of = [&](const PlanarPose& pose, double* cost) {
+  // Inliers among `subset` (indices into the points) and the MSAC cost over it.
+  auto inliers_of = [&](const PlanarPose& pose, const std::vector<int>& subset, double* cost) {
     std::vector<int> in;
     double sum = 0.0;
-    for (int i = 0; i < n; ++i) {
+    for (const int i : subset) {
       const double e = reprojection_error(pose, X_next[i], x_cur[i]);
       if (e < thr) {
         in.push_back(i);
@@ -272,49 +279,95 @@ std::optional<PlanarFix> planar_resection(const std::vector<cv::Vec3d>& X_next,
     if (cost) *cost = sum;
     return in;
   };
-
-  // RANSAC (MSAC cost) over 2-point samples; fixed seed: the result depends on the inputs only.
-  std::mt19937 rng(0x5e9);
-  std::optional<PlanarPose> best;
-  double best_cost = std::numeric_limits<double>::infinity();
-  for (int it = 0; it < options.ransac_iterations; ++it) {
-    const int i = static_cast<int>(rng() % static_cast<unsigned>(n));
-    int j = static_cast<int>(rng() % static_cast<unsigned>(n - 1));
-    if (j >= i) ++j;
-    const auto pose = linear_resection(X_next, x_cur, {i, j});
-    if (!pose) continue;
-    double cost = 0.0;
-    inliers_of(*pose, &cost);
-    if (cost < best_cost) {
-      best_cost = cost;
-      best = pose;
+  struct Structure {
+    PlanarFix fix;
+    std::vector<int> inliers;
+  };
+  // One rigid structure among `subset`: RANSAC (MSAC cost) over 2-point samples with a fixed
+  // seed (the result depends on the inputs only), then Gauss-Newton on its inliers.
+  auto fit = [&](const std::vector<int>& subset) -> std::optional<Structure> {
+    const int m = static_cast<int>(subset.size());
+    if (m < std::max(2, options.min_points)) return std::nullopt;
+    std::mt19937 rng(0x5e9);
+    std::optional<PlanarPose> best;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < options.ransac_iterations; ++it) {
+      const int i = static_cast<int>(rng() % static_cast<unsigned>(m));
+      int j = static_cast<int>(rng() % static_cast<unsigned>(m - 1));
+      if (j >= i) ++j;
+      const auto pose = linear_resection(X_next, x_cur, {subset[i], subset[j]});
+      if (!pose) continue;
+      double cost = 0.0;
+      inliers_of(*pose, subset, &cost);
+      if (cost < best_cost) {
+        best_cost = cost;
+        best = pose;
+      }
     }
-  }
-  if (!best) return std::nullopt;
-
-  PlanarPose pose = *best;
-  std::vector<int> in = inliers_of(pose, nullptr);
-  for (int it = 0; it < options.gauss_newton_iterations; ++it) {
+    if (!best) return std::nullopt;
+    PlanarPose pose = *best;
+    std::vector<int> in = inliers_of(pose, subset, nullptr);
+    for (int it = 0; it < options.gauss_newton_iterations; ++it) {
+      if (static_cast<int>(in.size()) < options.min_points) return std::nullopt;
+      if (!gauss_newton_step(X_next, x_cur, in, pose)) return std::nullopt;
+      in = inliers_of(pose, subset, nullptr);
+    }
     if (static_cast<int>(in.size()) < options.min_points) return std::nullopt;
-    if (!gauss_newton_step(X_next, x_cur, in, pose)) return std::nullopt;
-    in = inliers_of(pose, nullptr);
+    double sum_sq = 0.0;
+    for (const int i : in) {
+      const double e = reprojection_error(pose, X_next[i], x_cur[i]);
+      sum_sq += e * e;
+    }
+    Structure s;
+    s.fix.pose = pose;
+    s.fix.inliers = static_cast<int>(in.size());
+    s.fix.rms_px = focal_px * std::sqrt(sum_sq / static_cast<double>(in.size()));
+    s.inliers = std::move(in);
+    return s;
+  };
+
+  std::vector<int> all(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) all[static_cast<size_t>(i)] = i;
+  auto first = fit(all);
+  if (!first || !prior) return first ? std::optional<PlanarFix>(first->fix) : std::nullopt;
+
+  // Sequential RANSAC: each structure's inliers leave the pool, the next is sought in the rest.
+  std::vector<Structure> structures{std::move(*first)};
+  std::vector<bool> taken(static_cast<size_t>(n), false);
+  for (const int i : structures.front().inliers) taken[static_cast<size_t>(i)] = true;
+  while (static_cast<int>(structures.size()) < kMaxStructures) {
+    std::vector<int> rest;
+    for (int i = 0; i < n; ++i) {
+      if (!taken[static_cast<size_t>(i)]) rest.push_back(i);
+    }
+    auto next = fit(rest);
+    if (!next) break;
+    for (const int i : next->inliers) taken[static_cast<size_t>(i)] = true;
+    structures.push_back(std::move(*next));
   }
-  if (static_cast<int>(in.size()) < options.min_points) return std::nullopt;
-  double sum_sq = 0.0;
-  for (const int i : in) {
-    const double e = reprojection_error(pose, X_next[i], x_cur[i]);
-    sum_sq += e * e;
+  auto d2_of = [&](const PlanarPose& p) {
+    const double dx = (p.x_m - prior->pose.x_m) / prior->sigma_x;
+    const double dy = (p.y_m - prior->pose.y_m) / prior->sigma_y;
+    const double dyaw = std::remainder(p.yaw_rad - prior->pose.yaw_rad, 2.0 * std::numbers::pi) /
+                        prior->sigma_yaw_rad;
+    return dx * dx + dy * dy + dyaw * dyaw;
+  };
+  const Structure* chosen = nullptr;
+  for (const Structure& s : structures) {
+    if (d2_of(s.fix.pose) > prior->gate_chi2) continue;
+    if (!chosen || s.fix.inliers > chosen->fix.inliers) chosen = &s;
   }
-  PlanarFix fix;
-  fix.pose = pose;
-  fix.inliers = static_cast<int>(in.size());
-  fix.rms_px = focal_px * std::sqrt(sum_sq / static_cast<double>(in.size()));
+  PlanarFix fix = chosen ? chosen->fix : structures.front().fix;
+  fix.structures = static_cast<int>(structures.size());
+  fix.prior_d2 = d2_of(fix.pose);
+  fix.within_prior = chosen != nullptr;
   return fix;
 }
 
 std::optional<PlanarFix> locate_in_segment(const SegmentModel& model,
                                            const std::vector<CornerObservation>& matches,
-                                           double focal_px, const SegmentPoseOptions& options) {
+                                           double focal_px, const SegmentPoseOptions& options,
+                                           const PosePrior* prior) {
   std::vector<cv::Vec3d> X;
   std::vector<cv::Point2d> x;
   for (const CornerObservation& m : matches) {
@@ -323,7 +376,7 @@ std::optional<PlanarFix> locate_in_segment(const SegmentModel& model,
     X.push_back(it->second);
     x.push_back(m.other_norm);
   }
-  return planar_resection(X, x, focal_px, options);
+  return planar_resection(X, x, focal_px, options, prior);
 }
 
 }  // namespace pepper::core::control

@@ -100,11 +100,15 @@ double line_yaw_residual_rad(const NormSegment& seg_a, const NormSegment& seg_b,
 }
 
 std::optional<LineYaw> estimate_line_yaw(const std::vector<std::pair<NormSegment, NormSegment>>& pairs,
-                                         double pitch_rad, const LineYawOptions& options) {
+                                         double pitch_rad, const LineYawOptions& options,
+                                         const YawPrior* prior) {
   if (const auto errors = options.validate(); !errors.empty()) {
     throw std::invalid_argument("estimate_line_yaw: " + errors.front());
   }
   if (!std::isfinite(pitch_rad)) throw std::invalid_argument("estimate_line_yaw: pitch_rad is not finite");
+  if (prior && !(prior->sigma_rad > 0.0 && std::isfinite(prior->yaw_rad))) {
+    throw std::invalid_argument("estimate_line_yaw: the prior needs a finite yaw and a sigma > 0");
+  }
   const double c = std::cos(pitch_rad), s = std::sin(pitch_rad);
   struct Usable {
     cv::Vec3d d_a;  // unit horizontal direction in a
@@ -172,12 +176,14 @@ std::optional<LineYaw> estimate_line_yaw(const std::vector<std::pair<NormSegment
   for (int i = 0; i < n; ++i) {
     const Usable& u = use[static_cast<size_t>(i)];
     const double yaw = root(u.b.n, u.d_a);
+    if (prior && std::abs(yaw - prior->yaw_rad) > options.gate_sigmas * prior->sigma_rad) continue;
     const double sup = support(yaw, nullptr);
     if (sup > best_support) {
       best_support = sup;
       best_yaw = yaw;
     }
   }
+  if (best_support < 0.0) return std::nullopt;  // no proposal near the prior
   std::vector<int> inliers;
   support(best_yaw, &inliers);
   if (static_cast<int>(inliers.size()) < options.min_inliers) return std::nullopt;

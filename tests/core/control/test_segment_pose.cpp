@@ -122,6 +122,75 @@ TEST(SegmentPose, ResectionRejectsOutliers) {
   EXPECT_FALSE(planar_resection(few, few_x, kFocalPx, o));
 }
 
+// A moved object: 70 points on a book shelf ahead-left, moved 0.15 units and turned 7 degrees
+// since teaching, outnumber 40 points on the walls. Its consensus is the largest, so without a
+// prior the fix follows the shelf; with the odometry's prediction the walls' structure is chosen,
+// and a prediction far from every structure refuses them all.
+TEST(SegmentPose, ResectionPriorTellsTheRoomFromAMovedObject) {
+  const SegmentPoseOptions o;
+  const PlanarPose truth{-0.6, -0.05, -0.1};
+  const std::vector<cv::Vec3d> walls = room_points(40, 11);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> ux(-1.2, -0.2), uy(-0.9, 0.6), uz(2.5, 2.7);
+  std::vector<cv::Vec3d> shelf_taught;
+  for (int i = 0; i < 70; ++i) shelf_taught.emplace_back(ux(rng), uy(rng), uz(rng));
+  // The shelf where it stands now: turned by 7 degrees about its middle and moved.
+  const double a = 7.0 * M_PI / 180.0, c = std::cos(a), s = std::sin(a);
+  const cv::Vec3d mid(-0.7, 0.0, 2.6), shift(0.15, 0.0, 0.1);
+  std::vector<cv::Vec3d> X = walls, X_now = walls;
+  for (const cv::Vec3d& p : shelf_taught) {
+    const cv::Vec3d d = p - mid;
+    X.push_back(p);  // the model: where teaching triangulated it
+    X_now.push_back(mid + shift + cv::Vec3d(c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]));
+  }
+  const std::vector<cv::Point2d> x = observe(truth, X_now, 0.3, 13);
+  auto error = [&](const PlanarFix& f) {
+    return std::hypot(f.pose.x_m - truth.x_m, f.pose.y_m - truth.y_m);
+  };
+
+  const auto plain = planar_resection(X, x, kFocalPx, o);
+  ASSERT_TRUE(plain);
+  EXPECT_GE(plain->inliers, 60);  // the shelf's
+  EXPECT_GT(error(*plain), 0.1);  // so the fix is off by more than the moved shelf's lateral ...
+
+  PosePrior prior;  // odometry a few centimetres and a degree off the truth
+  prior.pose = {truth.x_m + 0.04, truth.y_m - 0.02, truth.yaw_rad + 0.015};
+  prior.sigma_x = 0.15;
+  prior.sigma_y = 0.05;
+  prior.sigma_yaw_rad = 0.03;
+  const auto with_prior = planar_resection(X, x, kFocalPx, o, &prior);
+  ASSERT_TRUE(with_prior);
+  EXPECT_TRUE(with_prior->within_prior);
+  EXPECT_GE(with_prior->structures, 2);
+  EXPECT_GE(with_prior->inliers, 36);  // the walls'
+  EXPECT_LE(with_prior->inliers, 45);
+  EXPECT_LT(error(*with_prior), 0.03);
+  EXPECT_NEAR(with_prior->pose.yaw_rad, truth.yaw_rad, 0.005);
+  EXPECT_LE(with_prior->prior_d2, prior.gate_chi2);
+
+  // A prediction far from both structures: nothing is the room; the largest is returned, marked.
+  PosePrior far = prior;
+  far.pose = {truth.x_m, truth.y_m + 0.6, truth.yaw_rad};
+  const auto refused = planar_resection(X, x, kFocalPx, o, &far);
+  ASSERT_TRUE(refused);
+  EXPECT_FALSE(refused->within_prior);
+  EXPECT_GT(refused->prior_d2, far.gate_chi2);
+  EXPECT_EQ(refused->inliers, plain->inliers);
+
+  // A loose prior (a fresh localisation) cannot tell them apart: the largest structure wins.
+  PosePrior loose = prior;
+  loose.sigma_x = loose.sigma_y = 2.0;
+  loose.sigma_yaw_rad = 1.0;
+  const auto loosely = planar_resection(X, x, kFocalPx, o, &loose);
+  ASSERT_TRUE(loosely);
+  EXPECT_TRUE(loosely->within_prior);
+  EXPECT_EQ(loosely->inliers, plain->inliers);
+
+  PosePrior bad = prior;
+  bad.sigma_y = 0.0;
+  EXPECT_THROW(planar_resection(X, x, kFocalPx, o, &bad), std::invalid_argument);
+}
+
 // IP and the current camera located in one reconstruction: their lateral offsets from the
 // segment agree with the metric truth once multiplied by the metric segment length, for any
 // scale of the IP translation passed in (two-view translations have none).

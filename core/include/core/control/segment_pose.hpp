@@ -69,6 +69,33 @@ struct PlanarFix {
   PlanarPose pose;
   int inliers = 0;
   double rms_px = 0.0;
+  /// With a PosePrior: the rigid structures found in the matches (each >= min_points inliers)
+  /// and the chosen one's squared Mahalanobis distance to the prior; 1 and 0 without.
+  int structures = 1;
+  double prior_d2 = 0.0;
+  /// False when no structure was within the prior's gate: then this is the largest one, and
+  /// not the room as far as the odometry can tell (the caller should not use it as a fix).
+  bool within_prior = true;
+};
+
+/// Where the robot's odometry estimate puts the current camera in IN's floor frame (segment
+/// units), with the sigma of the difference between that prediction and a correct fix (the
+/// prediction's and the fix's own, combined) per axis of IN's floor frame.
+///
+/// Why: the resection's largest consensus is the most textured rigid structure in view, and a
+/// moved shelf is as rigid as the room. Measured (room_corridor_room, VGA, furniture, run 1):
+/// in room B the moved book shelf (15 cm, 7 degrees) outnumbered the walls, every fix put the
+/// robot 15-35 cm to the wrong side, and it drove into the moved bench. Each structure found in
+/// the matches is a hypothesis; the one the odometry predicts is the room (docs/method/navigator.md
+/// "Moved objects").
+struct PosePrior {
+  PlanarPose pose;
+  double sigma_x = 1.0;        ///< along IN's optical axis, segment units, > 0
+  double sigma_y = 1.0;        ///< across it, segment units, > 0
+  double sigma_yaw_rad = 1.0;  ///< > 0
+  /// Squared Mahalanobis distance beyond which a structure is not the room: chi-square, 3 dof,
+  /// 99.9 %.
+  double gate_chi2 = 16.27;
 };
 
 /// Camera-frame coordinates in C of a point given in R's camera frame (model above).
@@ -97,13 +124,23 @@ std::optional<SegmentModel> build_segment_model(const PlanarPose& prev_in_next,
 
 /// Step 2. matches: IN corners tracked into the current image (other_norm = current); those
 /// without a triangulated point are ignored. nullopt with fewer than min_points inliers.
+/// prior: see planar_resection.
 std::optional<PlanarFix> locate_in_segment(const SegmentModel& model,
                                            const std::vector<CornerObservation>& matches,
-                                           double focal_px, const SegmentPoseOptions& options);
+                                           double focal_px, const SegmentPoseOptions& options,
+                                           const PosePrior* prior = nullptr);
 
 /// Resection of step 2 on explicit 3D points (IN's camera frame) and their normalised images.
+/// Without a prior: the pose of the largest consensus. With one: RANSAC again on what each
+/// structure leaves (sequential RANSAC, up to kMaxStructures), and the fix is the structure with
+/// the most inliers among those within the prior's gate; when none is (every structure in view
+/// has moved, as far as the odometry can tell), the largest with within_prior false.
 std::optional<PlanarFix> planar_resection(const std::vector<cv::Vec3d>& X_next,
                                           const std::vector<cv::Point2d>& x_cur, double focal_px,
-                                          const SegmentPoseOptions& options);
+                                          const SegmentPoseOptions& options,
+                                          const PosePrior* prior = nullptr);
+
+/// Structures planar_resection looks for when given a prior.
+constexpr int kMaxStructures = 3;
 
 }  // namespace pepper::core::control

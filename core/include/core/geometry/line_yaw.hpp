@@ -76,9 +76,19 @@ struct LineYaw {
 double line_yaw_residual_rad(const NormSegment& seg_a, const NormSegment& seg_b, double yaw_rad,
                              double pitch_rad);
 
-/// pairs: (segment in view a, segment in view b), normalised coordinates. Throws
-/// std::invalid_argument for invalid options or a non-finite pitch.
+/// What odometry predicts for the yaw (rad) and its sigma (rad, > 0).
+struct YawPrior {
+  double yaw_rad = 0.0;
+  double sigma_rad = 1.0;
+};
+/// pairs: (segment in view a, segment in view b), normalised coordinates. With a prior, only the
+/// proposals within gate_sigmas of its sigma compete:
+/// a moved shelf's boards are as straight and horizontal as the room's skirting, and when they
+/// outnumber it their consensus is the largest (room_corridor_room, furniture; the resection's
+/// PosePrior in control/segment_pose.hpp is the same idea). Throws std::invalid_argument for
+/// invalid options, a non-finite pitch or a prior whose sigma is not > 0.
 std::optional<LineYaw> estimate_line_yaw(const std::vector<std::pair<NormSegment, NormSegment>>& pairs,
-                                         double pitch_rad, const LineYawOptions& options = {});
+                                         double pitch_rad, const LineYawOptions& options = {},
+                                         const YawPrior* prior = nullptr);
 
 }  // namespace pepper::core::geometry

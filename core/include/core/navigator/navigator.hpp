@@ -300,6 +300,9 @@ class Navigator {
   double odometry_demand(bool& on_the_spot);
   /// Whether odometry may steer where VNHV has no estimate: a vision fix is recent enough.
   bool odometry_steers() const;
+  /// The odometry estimate as the VNHV resection's prior for segment IN (control::PosePrior);
+  /// nullopt without odometry or a segment scale.
+  std::optional<control::PosePrior> resection_prior(int in) const;
   /// Without a VNHV fix this frame: the heading relative to IN from the lines matched with it
   /// corrects the odometry estimate's heading (a Kalman update against heading_sigma_rad_;
   /// telemetry line_yaw_*).
@@ -348,6 +351,11 @@ class Navigator {
   /// Sigma of the odometry estimate's heading (rad): the odometry's error model (navigator.cpp,
   /// kOdometryYawErrorPerRad) and the line-yaw Kalman update.
   double heading_sigma_rad_ = 0.1;
+  /// Sigmas of the odometry estimate's position along and across the robot's heading (m), the
+  /// same model: they grow with the distance driven (across: times the heading's sigma) and
+  /// shrink with each VNHV fix. With heading_sigma_rad_ they are the prior that tells the room
+  /// from a moved object in the resection (control::PosePrior).
+  double along_sigma_m_ = 0.5, lateral_sigma_m_ = 0.5;
   /// This frame, odometry places the robot on a piece of the taught path that teaching turned on
   /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
   /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.

@@ -86,6 +86,13 @@ struct Telemetry {
   /// Triangulated points of the VNHV model of the current segment; 0: no model (IBVS drives);
   /// -1: VNHV is not the controller.
   int vnhv_model_points = -1;
+  /// The resection's rigid structures this frame (control::PlanarFix::structures; 0: none or no
+  /// model) and whether the one the odometry predicts was within its gate (a fix) or none was
+  /// (vnhv_fix_refused: every structure in view has moved as far as the odometry can tell).
+  int vnhv_structures = 0;
+  bool vnhv_fix_refused = false;
+  /// This frame's own VNHV measurement (before the deviation filter), NaN without an accepted fix.
+  double vnhv_fix_lateral_m = kNaN, vnhv_fix_heading_rad = kNaN;
   double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
   /// Part of omega_demand_rad_s fed forward from the segment's taught turn (turn_feedforward),
   /// rad/s; NaN when none was added.
