@@ -631,12 +631,18 @@ TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
 }
 
 // The default VNHV (VnhvOptions::max_arc_turn_rad = 1, Kp 9, Kd 6): straight segments on their
-// chord, the turning ones on their taught arc, curvature fed forward. "Helps" is judged on the
-// distance to the taught path from the turn on (RMS, the evaluation's measure), not on the one
-// final pose: with the five-point essential model (the default) the off-path RMS is 1.80 cm with
-// the arcs against 1.91 cm with IBVS on the turning segments (max_arc_turn_rad = 0), with the
-// planar model 1.57 against 1.79 cm, while the final lateral errors (2-10 mm) order the two
-// either way; the [ measured ] line prints both.
+// chord, the turning ones on their taught arc, curvature fed forward. Judged on the distance to
+// the taught path from the turn on (the evaluation's measure) against the product's targets
+// (lateral RMS <= 5 cm, max <= 15 cm; README "Closed-loop evaluation"), and on the final pose.
+// Measured from this start: RMS 2.49 cm, max 5.07 cm, end lateral -1.3 cm, yaw 0.014 rad.
+// Whether the arcs beat IBVS on the turning segments (max_arc_turn_rad = 0) is not decided on
+// this 5 Hz, 4.5 cm-per-frame tour: the test used to assert it from this one start (1.80 against
+// 1.91 cm RMS), but from five starts (10 cm left / 0.1 rad right as here, 10 cm right / 0.1 rad
+// left, 5 cm / 0, 0 / -0.05 rad, 15 cm / 0.05 rad) the two tie on average (1.83 and 1.83 cm) on
+// the ray-casting renderer these tests used before, and the arcs lose on sim's images (2.51
+// against 2.13 cm; from this start 2.49 against 1.84), images that differ from the earlier ones
+// by 0.02 grey levels on average. The arcs are the default on the mock-robot evaluations'
+// evidence (docs/method/control.md "Turns"); the [ measured ] line prints both variants.
 TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
@@ -657,7 +663,9 @@ TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
             << e.max_off_path_m << " m, rms " << e.rms_off_path_m << " m; IBVS on the turns: "
             << ibvs_turns.lateral_m << ", " << ibvs_turns.max_off_path_m << ", "
             << ibvs_turns.rms_off_path_m << "\n";
-  EXPECT_LT(e.rms_off_path_m, ibvs_turns.rms_off_path_m) << "the arcs did not help";
+  EXPECT_LE(e.rms_off_path_m, 0.05) << "over the product's lateral RMS target";
+  EXPECT_LE(e.max_off_path_m, 0.15) << "over the product's lateral maximum target";
+  EXPECT_EQ(ibvs_turns.last.command.reason, StopReason::kTourComplete);
 }
 
 }  // namespace
