@@ -1,5 +1,5 @@
 // Navigator hot paths on synthetic VGA frames (tests/core/navigator/test_world.hpp: a textured
-// box room rendered by ray casting), single-threaded.
+// box room built on sim and drawn by sim::Renderer, camera effects off), single-threaded.
 //   BM_NavigatorStep       one Navigator::step on VGA while navigating (feature extraction,
 //                          two-view matching with IN and INN, and when the switching rules need
 //                          them n(IP, Ia) and the two three-view counts; control), key images
@@ -42,7 +42,7 @@ const core::CameraIntrinsics& vga() {
   return k;
 }
 
-core::memory::KeyImage key_at(const test::BoxWorld& world, const test::Pose2d& pose, int64_t i) {
+core::memory::KeyImage key_at(const test::BoxWorld& world, const sim::Pose2D& pose, int64_t i) {
   static const core::features::FeatureExtractor extractor(vga());
   core::memory::KeyImage k;
   k.source_frame_index = i;
@@ -145,7 +145,7 @@ const Tour& tour() {
     teach.selector.epsilon = 120;
     Tour r;
     r.map = core::mapping::teach_offline(test::render_frames(world, path, vga()), vga(), teach);
-    std::vector<test::Pose2d> replay = path;
+    std::vector<sim::Pose2D> replay = path;
     for (auto& p : replay) {
       p.x_m -= 0.05 * std::sin(p.yaw_rad);
       p.y_m += 0.05 * std::cos(p.yaw_rad);
@@ -166,7 +166,7 @@ BENCHMARK(BM_NavigatorStepTour)->Unit(benchmark::kMillisecond)->Iterations(99);
 
 // Pose at key index i (may be fractional) of 150 along a rounded-square loop (half side 2.4 m,
 // corner radius 1.0 m, perimeter ~21.8 m), counter-clockwise; `left_m` shifts it sideways.
-test::Pose2d loop_pose(double i, double left_m = 0.0) {
+sim::Pose2D loop_pose(double i, double left_m = 0.0) {
   const double h = 2.4, rc = 1.0, side = 2 * (h - rc), arc = std::numbers::pi / 2 * rc;
   double s = 4 * (side + arc) * i / 150.0;
   const int quarter = static_cast<int>(s / (side + arc));

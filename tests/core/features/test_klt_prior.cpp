@@ -21,14 +21,14 @@ namespace {
 struct Sequence {
   ImageFeatures key, previous, current;
 };
-constexpr test::Pose2d kKeyPose{-3.0, -2.0, 0.00}, kPreviousPose{-2.80, -1.99, 0.05},
+constexpr sim::Pose2D kKeyPose{-3.0, -2.0, 0.00}, kPreviousPose{-2.80, -1.99, 0.05},
     kCurrentPose{-2.76, -1.98, 0.09};
 
 // Where the room point seen at pixel p from base pose a appears from pose b (the renderer's
 // geometry: default 8 x 8 x 3 m room, camera 5 cm ahead of the base axis, 1.15 m high);
 // none when it is behind b or outside b's image.
-std::optional<cv::Point2f> true_position(const cv::Point2f& p, const test::Pose2d& a,
-                                         const test::Pose2d& b) {
+std::optional<cv::Point2f> true_position(const cv::Point2f& p, const sim::Pose2D& a,
+                                         const sim::Pose2D& b) {
   constexpr double kHalfX = 4.0, kHalfY = 4.0, kRoomH = 3.0, kDelta = 0.05, kCamH = 1.15;
   const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
   double c = std::cos(a.yaw_rad), s = std::sin(a.yaw_rad);

@@ -100,7 +100,7 @@ std::vector<Frame> frames_with_odometry(const test::SharedTour& tour) {
   std::vector<Frame> frames = tour.frames;
   const double c = std::cos(0.7), s = std::sin(0.7);
   for (size_t i = 0; i < frames.size(); ++i) {
-    const test::Pose2d& p = tour.path[i];
+    const sim::Pose2D& p = tour.path[i];
     frames[i].odom = OdometryPose{10.0 + c * p.x_m - s * p.y_m, -4.0 + s * p.x_m + c * p.y_m,
                                   0.7 + 1.03 * p.yaw_rad};
   }

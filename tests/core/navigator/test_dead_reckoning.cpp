@@ -23,7 +23,7 @@ const test::SharedTour& tour() { return test::shared_tour(); }
 memory::VisualMemory map_with_odometry() {
   memory::VisualMemory map = tour().map;
   for (memory::KeyImage& k : map.key_images) {
-    const test::Pose2d& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
+    const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
     k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
   }
   return map;
@@ -31,7 +31,7 @@ memory::VisualMemory map_with_odometry() {
 
 struct ClosedLoopRun {
   std::vector<StepResult> steps;
-  std::vector<test::Pose2d> truth;  ///< the robot's pose when each frame was taken
+  std::vector<sim::Pose2D> truth;  ///< the robot's pose when each frame was taken
 };
 
 // Closed loop at 5 Hz from the tour's start. The robot executes each command exactly; its
@@ -41,7 +41,7 @@ template <class Blind>
 ClosedLoopRun closed_loop(const NavigatorOptions& o, Blind blind, int max_frames = 260) {
   Navigator nav(map_with_odometry(), o);
   ClosedLoopRun run;
-  test::Pose2d pose = tour().path.front();
+  sim::Pose2D pose = tour().path.front();
   OdometryPose odom{10.0, -4.0, 1.0};
   double travelled_m = 0.0;
   constexpr int64_t kDtNs = 200'000'000;
@@ -74,9 +74,9 @@ ClosedLoopRun closed_loop(const NavigatorOptions& o, Blind blind, int max_frames
 }
 
 // Distance from the taught path (its densely sampled poses).
-double off_path_m(const test::Pose2d& p) {
+double off_path_m(const sim::Pose2D& p) {
   double best = 1e9;
-  for (const test::Pose2d& q : tour().path) {
+  for (const sim::Pose2D& q : tour().path) {
     best = std::min(best, std::hypot(p.x_m - q.x_m, p.y_m - q.y_m));
   }
   return best;

@@ -1,6 +1,7 @@
-// Navigator on synthetic rendered tours (test_world.hpp): replaying the taught frames walks the
-// key images in order to the end and stops there; same frames give bit-identical commands;
-// vanishing features hold the last command for hold_s of frame time, then stop with a reason.
+// Navigator on tours rendered in sim's box room (test_world.hpp): replaying the taught frames
+// walks the key images in order to the end and stops there; same frames give bit-identical
+// commands; vanishing features hold the last command for hold_s of frame time, then stop with a
+// reason.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -336,7 +337,7 @@ TEST(Navigator, TurnFeedForwardMovesTheDemandToTheTaughtCurvatureTimesTheSpeed) 
   // with the tight cap).
   struct Case {
     double gain, max_lead_rad, lambda;
-    int min_floors, min_ceilings;  // measured: 9 floors, 10 floors, 9 ceilings
+    int min_floors, min_ceilings;  // measured: 10 floors, 11 floors, 9 ceilings
   };
   for (const Case c : {Case{1.0, 0.0, 0.3, 4, 0}, Case{0.5, 0.0, 0.3, 4, 0},
                        Case{1.0, 0.02, 2.0, 0, 4}}) {
@@ -537,7 +538,7 @@ double distance_to_tour_path_m(double x_m, double y_m) {
 
 ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
   Navigator nav(tour().map, options);
-  test::Pose2d pose{-3.0, -2.0 + 0.10, -0.10};
+  sim::Pose2D pose{-3.0, -2.0 + 0.10, -0.10};
   const double dt = 0.2;
   ClosedLoopEnd out;
   int last_in = 0;
@@ -579,7 +580,7 @@ ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
   }
   out.rms_off_path_m = n_off > 0 ? std::sqrt(sum_sq / n_off) : 0.0;
   // Final pose against the taught end, in the end's heading frame.
-  const test::Pose2d end = tour().path.back();
+  const sim::Pose2D end = tour().path.back();
   const double dx = pose.x_m - end.x_m, dy = pose.y_m - end.y_m;
   out.along_m = dx * std::cos(end.yaw_rad) + dy * std::sin(end.yaw_rad);
   out.lateral_m = -dx * std::sin(end.yaw_rad) + dy * std::cos(end.yaw_rad);
@@ -590,11 +591,11 @@ ClosedLoopEnd drive_closed_loop(const NavigatorOptions& options) {
 // Closed loop: the robot starts 10 cm left of the taught start and 0.1 rad off; the commands
 // move a simulated unicycle (camera 0.05 m ahead of the axis) in the same world at 5 Hz. It must
 // walk the key images in order, reach the end and stop there, close to the taught final pose.
-// Bounds: measured final errors about 3 cm along-track, 12 cm lateral, 0.03 rad (docs/method/
-// navigator.md; the centroid law corrects lateral offsets only weakly) before KLT started at the
-// lines' shift in turns; with it, 40 cm lateral on this 5 Hz, 4.5 cm-per-frame tour (fewer key
-// images in its turn). The prior stays because it decides success in the mock worlds at 15 Hz
-// (docs/perception.md "KLT starting guess"); the bound is the measured value with margin.
+// Bounds: the measured final errors with margin; the centroid law corrects lateral offsets only
+// weakly (docs/method/navigator.md). Measured on sim's images: along -2.4 cm, lateral 11.3 cm,
+// yaw -0.025 rad (on the ray-casting renderer these tests used before: -3.9 cm, 6.5 cm,
+// -0.015 rad). The lateral bound had been raised from 25 to 45 cm when KLT started at the
+// lines' shift in turns (then 40 cm measured); it is back at 25 cm.
 TEST(Navigator, ClosedLoopFollowsTheTourAndStopsAtTheEnd) {
   NavigatorOptions ibvs;
   ibvs.controller = ControllerKind::kIbvs;  // the IBVS law alone (VNHV is the default: below)
@@ -604,19 +605,19 @@ TEST(Navigator, ClosedLoopFollowsTheTourAndStopsAtTheEnd) {
   EXPECT_EQ(e.switches, static_cast<int>(tour().map.key_images.size()) - 2);
   EXPECT_EQ(e.vnhv_frames, 0);
   EXPECT_LT(std::abs(e.along_m), 0.30) << "along " << e.along_m;
-  EXPECT_LT(std::abs(e.lateral_m), 0.45) << "lateral " << e.lateral_m;
+  EXPECT_LT(std::abs(e.lateral_m), 0.25) << "lateral " << e.lateral_m;
   EXPECT_LT(std::abs(e.yaw_err_rad), 0.15);
 }
 
 // The same drive with the VNHV controller (teach speed of this tour: 0.225 m/s). It must use
-// its own estimate, not only the IBVS fallback, and end closer laterally: measured along
-// 0.003 m, lateral -0.033 m, yaw 0.035 rad, 174 frames with an estimate (Kp 9, Kd 6; with
-// Kp 4, Kd 4: -0.004, -0.057, 0.050, 168); the bounds leave margin.
+// its own estimate, not only the IBVS fallback, and end closer laterally: measured on sim's
+// images along -0.006 m, lateral -0.031 m, yaw 0.043 rad, 169 frames with an estimate (Kp 9,
+// Kd 6; on the earlier ray-casting renderer -0.021, -0.014, 0.015, 162); the bounds leave margin.
 TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
   o.vnhv.teach_speed_m_s = 0.225;
-  // This tour has 6 key images, so its segments include the turn; the default hands segments
+  // This tour has 7 key images, so its segments include the turn; the default hands segments
   // turning > 0.1 rad to IBVS, or to their arcs (next test). The chord law is tested here.
   o.vnhv.max_segment_turn_rad = 10.0;
   const ClosedLoopEnd e = drive_closed_loop(o);
@@ -630,12 +631,18 @@ TEST(Navigator, ClosedLoopWithVnhvFollowsTheTour) {
 }
 
 // The default VNHV (VnhvOptions::max_arc_turn_rad = 1, Kp 9, Kd 6): straight segments on their
-// chord, the turning ones on their taught arc, curvature fed forward. "Helps" is judged on the
-// distance to the taught path from the turn on (RMS, the evaluation's measure), not on the one
-// final pose: with the five-point essential model (the default) the off-path RMS is 1.80 cm with
-// the arcs against 1.91 cm with IBVS on the turning segments (max_arc_turn_rad = 0), with the
-// planar model 1.57 against 1.79 cm, while the final lateral errors (2-10 mm) order the two
-// either way; the [ measured ] line prints both.
+// chord, the turning ones on their taught arc, curvature fed forward. Judged on the distance to
+// the taught path from the turn on (the evaluation's measure) against the product's targets
+// (lateral RMS <= 5 cm, max <= 15 cm; README "Closed-loop evaluation"), and on the final pose.
+// Measured from this start: RMS 2.49 cm, max 5.07 cm, end lateral -1.3 cm, yaw 0.014 rad.
+// Whether the arcs beat IBVS on the turning segments (max_arc_turn_rad = 0) is not decided on
+// this 5 Hz, 4.5 cm-per-frame tour: the test used to assert it from this one start (1.80 against
+// 1.91 cm RMS), but from five starts (10 cm left / 0.1 rad right as here, 10 cm right / 0.1 rad
+// left, 5 cm / 0, 0 / -0.05 rad, 15 cm / 0.05 rad) the two tie on average (1.83 and 1.83 cm) on
+// the ray-casting renderer these tests used before, and the arcs lose on sim's images (2.51
+// against 2.13 cm; from this start 2.49 against 1.84), images that differ from the earlier ones
+// by 0.02 grey levels on average. The arcs are the default on the mock-robot evaluations'
+// evidence (docs/method/control.md "Turns"); the [ measured ] line prints both variants.
 TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
   NavigatorOptions o;
   o.controller = ControllerKind::kVnhv;
@@ -656,7 +663,9 @@ TEST(Navigator, ClosedLoopWithVnhvArcsFollowsTheTour) {
             << e.max_off_path_m << " m, rms " << e.rms_off_path_m << " m; IBVS on the turns: "
             << ibvs_turns.lateral_m << ", " << ibvs_turns.max_off_path_m << ", "
             << ibvs_turns.rms_off_path_m << "\n";
-  EXPECT_LT(e.rms_off_path_m, ibvs_turns.rms_off_path_m) << "the arcs did not help";
+  EXPECT_LE(e.rms_off_path_m, 0.05) << "over the product's lateral RMS target";
+  EXPECT_LE(e.max_off_path_m, 0.15) << "over the product's lateral maximum target";
+  EXPECT_EQ(ibvs_turns.last.command.reason, StopReason::kTourComplete);
 }
 
 }  // namespace
