@@ -41,12 +41,12 @@ void DeviationFilter::reset() {
   rejections_ = 0;
 }
 
-void DeviationFilter::start(const SegmentDeviation& measured, int64_t t_ns) {
+void DeviationFilter::start(const SegmentDeviation& measured, int64_t t_ns, double weight) {
   started_ = true;
   y_m_ = measured.lateral_m;
   theta_rad_ = wrap_angle_rad(measured.heading_rad);
   const double sy = options_.measurement_sigma_m, st = options_.measurement_sigma_rad;
-  P_ = cv::Matx22d(sy * sy, 0.0, 0.0, st * st);
+  P_ = cv::Matx22d(sy * sy, 0.0, 0.0, st * st) * (1.0 / weight);
   t_ns_ = t_ns;
   last_accepted_t_ns_ = t_ns;
   rejections_ = 0;
@@ -78,12 +78,16 @@ void DeviationFilter::predict(double v_m_s, double omega_rad_s, int64_t t_ns,
 }
 
 DeviationFilter::Correction DeviationFilter::correct(const SegmentDeviation& measured,
-                                                     int64_t t_ns) {
+                                                     int64_t t_ns, double weight) {
   if (!std::isfinite(measured.lateral_m) || !std::isfinite(measured.heading_rad)) {
     throw std::invalid_argument("DeviationFilter::correct: non-finite measurement");
   }
+  if (!(weight > 0.0 && weight <= 1.0)) {
+    throw std::invalid_argument("DeviationFilter::correct: weight " + std::to_string(weight) +
+                                " is not in (0, 1]");
+  }
   if (!started_) {
-    start(measured, t_ns);
+    start(measured, t_ns, weight);
     return Correction::kStarted;
   }
   if (t_ns != t_ns_) {
@@ -94,12 +98,12 @@ DeviationFilter::Correction DeviationFilter::correct(const SegmentDeviation& mea
   const double sy = options_.measurement_sigma_m, st = options_.measurement_sigma_rad;
   const cv::Vec2d innovation(measured.lateral_m - y_m_,
                              wrap_angle_rad(measured.heading_rad - theta_rad_));
-  const cv::Matx22d S = P_ + cv::Matx22d(sy * sy, 0.0, 0.0, st * st);
+  const cv::Matx22d S = P_ + cv::Matx22d(sy * sy, 0.0, 0.0, st * st) * (1.0 / weight);
   const cv::Matx22d S_inv = S.inv();
   const double d2 = (innovation.t() * S_inv * innovation)(0);
   if (!(d2 <= options_.gate_chi2)) {
     if (++rejections_ >= options_.max_rejections) {
-      start(measured, t_ns);
+      start(measured, t_ns, weight);
       return Correction::kRestarted;
     }
     return Correction::kRejected;

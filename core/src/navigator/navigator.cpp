@@ -614,7 +614,13 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
                                               vnhv_pose_, prior ? &*prior : nullptr);
   tel.vnhv_structures = fix ? fix->structures : 0;
   tel.vnhv_fix_refused = fix && !fix->within_prior;
-  if (fix && fix->within_prior) {
+  // A fix's weight against the prediction (Tukey's biweight of its Mahalanobis distance, zero at
+  // the gate): one near the gate's edge hardly pulls. With a fixed pull, a moved structure that
+  // hovered at the gate's edge was accepted now and then, each time pulling the estimate halfway
+  // to itself, until every fix of it was within the gate (room_corridor_room, furniture, run 4).
+  const double fix_weight =
+      fix && prior ? std::pow(std::max(0.0, 1.0 - fix->prior_d2 / prior->gate_chi2), 2) : 1.0;
+  if (fix && fix->within_prior && fix_weight > 0.0) {
     const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
     const bool arc = vnhv_curvature_1_m_ != 0.0;
     // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
@@ -625,19 +631,19 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       dev->lateral_m *= vnhv_m_per_unit_;  // segment units -> m
       tel.vnhv_fix_lateral_m = dev->lateral_m;
       tel.vnhv_fix_heading_rad = dev->heading_rad;
-      vnhv_filter_.correct(*dev, tel.t_ns);
+      vnhv_filter_.correct(*dev, tel.t_ns, fix_weight);
     }
     if (odom_ && tracker_.usable()) {
       // The fix is the robot's pose in IN's frame, in segment units: in metres, from IN's taught
       // pose, it is where the robot is on the taught path.
       const OdometryPose in_next{fix->pose.x_m * vnhv_m_per_unit_,
                                  fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
-      fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), kFixGain);
-      heading_sigma_rad_ = std::hypot((1.0 - kFixGain) * heading_sigma_rad_,
-                                      kFixGain * kFixHeadingSigmaRad);
-      along_sigma_m_ = std::hypot((1.0 - kFixGain) * along_sigma_m_, kFixGain * kFixAlongSigmaM);
-      lateral_sigma_m_ =
-          std::hypot((1.0 - kFixGain) * lateral_sigma_m_, kFixGain * kFixPositionSigmaM);
+      const double gain = kFixGain * fix_weight;
+      fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), gain);
+      heading_sigma_rad_ =
+          std::hypot((1.0 - gain) * heading_sigma_rad_, gain * kFixHeadingSigmaRad);
+      along_sigma_m_ = std::hypot((1.0 - gain) * along_sigma_m_, gain * kFixAlongSigmaM);
+      lateral_sigma_m_ = std::hypot((1.0 - gain) * lateral_sigma_m_, gain * kFixPositionSigmaM);
       if (seg.next + 1 == static_cast<int>(map_.key_images.size())) {
         final_fix_.emplace(in_next, tel.t_ns);
       }

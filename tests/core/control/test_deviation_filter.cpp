@@ -146,6 +146,34 @@ TEST(DeviationFilter, PredictionAloneExpires) {
   EXPECT_FALSE(f.estimate(500'000'001));
 }
 
+// A weighted measurement counts as one with its variance divided by the weight: a quarter-weight
+// fix moves the estimate less than a full one, and one that starts the filter leaves it uncertain
+// enough that the next full-weight measurement takes over most of the way.
+TEST(DeviationFilter, AWeightScalesTheMeasurementNoise) {
+  auto after = [](double weight) {
+    DeviationFilter f;
+    f.correct({0.0, 0.0}, 0);
+    f.predict(0.0, 0.0, kFrameNs);
+    f.correct({0.1, 0.0}, kFrameNs, weight);
+    return f.estimate(kFrameNs)->lateral_m;
+  };
+  const double full = after(1.0), quarter = after(0.25);
+  EXPECT_GT(full, 0.04);  // equal variances: about halfway
+  EXPECT_LT(full, 0.06);
+  EXPECT_GT(quarter, 0.005);
+  EXPECT_LT(quarter, 0.5 * full);
+
+  DeviationFilter g;
+  g.correct({0.2, 0.0}, 0, 0.05);  // started by a doubtful fix
+  g.predict(0.0, 0.0, kFrameNs);
+  g.correct({0.0, 0.0}, kFrameNs);
+  EXPECT_LT(std::abs(g.estimate(kFrameNs)->lateral_m), 0.02);
+
+  DeviationFilter h;
+  EXPECT_THROW(h.correct({0.0, 0.0}, 0, 0.0), std::invalid_argument);
+  EXPECT_THROW(h.correct({0.0, 0.0}, 0, 1.5), std::invalid_argument);
+}
+
 TEST(DeviationFilter, ContractViolationsThrow) {
   DeviationFilterOptions bad;
   bad.measurement_sigma_m = 0.0;

@@ -47,13 +47,14 @@ class DeviationFilter {
   /// With a curved reference (curvature_1_m, > 0 left) the path's own turn is subtracted:
   /// theta' = omega - kappa v cos(theta) / (1 - kappa y) (1 - kappa y clamped at 0.1).
   void predict(double v_m_s, double omega_rad_s, int64_t t_ns, double curvature_1_m = 0.0);
-  /// Fuse a measurement taken at t_ns (call predict(.., t_ns) first once started).
-  Correction correct(const SegmentDeviation& measured, int64_t t_ns);
+  /// Fuse a measurement taken at t_ns (call predict(.., t_ns) first once started). weight in
+  /// (0, 1]: the measurement's noise variance is divided by it (a robust weight from elsewhere).
+  Correction correct(const SegmentDeviation& measured, int64_t t_ns, double weight = 1.0);
   /// The current estimate at t_ns (see file comment for nullopt).
   std::optional<SegmentDeviation> estimate(int64_t t_ns) const;
 
  private:
-  void start(const SegmentDeviation& measured, int64_t t_ns);
+  void start(const SegmentDeviation& measured, int64_t t_ns, double weight);
 
   DeviationFilterOptions options_;
   bool started_ = false;
