@@ -209,7 +209,8 @@ std::vector<std::optional<OdometryPose>> taught_odometry(const memory::VisualMem
   return out;
 }
 
-// A vision fix moves the odometry estimate this far towards itself (1: all the way). Half: one
+// A vision fix moves the odometry estimate this far towards itself (1: all the way), times the
+// fix's weight against the prediction (vnhv_omega: 1 at the prediction, 0 at the gate). Half: one
 // fix's noise (a few cm laterally, more along the segment) is halved, and two or three located
 // frames remove the drift of a dead-reckoned turn.
 constexpr double kFixGain = 0.5;
