@@ -688,6 +688,13 @@ features::FrameMatcher Navigator::perceive(const Frame& frame, bool for_localisa
 Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Telemetry& tel) {
   const localization::Segment seg = switcher_->segment();
   ensure_pyramids(seg);
+  // IN and INN are matched on every frame (the counts below, control): as two concurrent tasks
+  // (FrameMatcher::compute_two_views; the same results as one after the other).
+  if (seg.next_next) {
+    const features::FrameMatcher::KeyRef keys[] = {{seg.next, &key(seg.next)},
+                                                   {*seg.next_next, &key(*seg.next_next)}};
+    fm.compute_two_views(keys);
+  }
   const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
   tel.n_lines_next = tv_n.n_lines();
   tel.n_points_next = tv_n.n_points();
