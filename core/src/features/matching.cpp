@@ -730,6 +730,8 @@ const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures
       .first->second;
 }
 
+bool FrameMatcher::concurrent() { return cv::getNumThreads() > 1; }
+
 void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
   struct Task {
     KeyRef key;
@@ -768,7 +770,7 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
   // from whatever else runs. cv::getNumThreads() <= 1 (the one-core benchmarks) keeps
   // everything on the calling thread.
   std::vector<std::thread> helpers;
-  if (cv::getNumThreads() > 1) {
+  if (concurrent()) {
     helpers.reserve(tasks.size() - 1);
     for (size_t i = 1; i < tasks.size(); ++i) helpers.emplace_back(run, std::ref(tasks[i]));
     run(tasks.front());

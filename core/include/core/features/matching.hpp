@@ -230,6 +230,8 @@ class FrameMatcher {
   /// An id given twice is computed once. Throws std::invalid_argument for a null `features`
   /// and what two_view() throws (the first task's error; the other results are then kept).
   void compute_two_views(std::span<const KeyRef> keys);
+  /// Whether compute_two_views() runs its tasks concurrently (cv::getNumThreads() > 1).
+  static bool concurrent();
 
   /// two_view() for the control law and the scale ratio: when KLT verified fewer points than
   /// orb_fallback_below_points and both images carry ORB keypoints, the same lines with the
