@@ -723,6 +723,11 @@ void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior) 
 const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures& key) {
   auto it = two_view_.find(key_id);
   if (it != two_view_.end()) return it->second;
+  if (const auto held = speculative_.find(key_id); held != speculative_.end()) {
+    it = two_view_.emplace(key_id, std::move(held->second)).first;
+    speculative_.erase(held);
+    return it->second;
+  }
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
@@ -747,8 +752,21 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
       throw std::invalid_argument("FrameMatcher::compute_two_views: key " + std::to_string(k.id) +
                                   " has no features");
     if (two_view_.count(k.id) != 0) continue;
-    if (std::any_of(tasks.begin(), tasks.end(), [&](const Task& t) { return t.key.id == k.id; }))
+    if (k.speculative && !concurrent()) continue;  // on one thread: work for nothing
+    if (const auto held = speculative_.find(k.id); held != speculative_.end()) {
+      if (!k.speculative) {  // asked for now: as two_view() would
+        two_view_.emplace(k.id, std::move(held->second));
+        speculative_.erase(held);
+      }
       continue;
+    }
+    // An id given twice is computed once, held back only if every mention is speculative.
+    if (const auto same = std::find_if(tasks.begin(), tasks.end(),
+                                       [&](const Task& t) { return t.key.id == k.id; });
+        same != tasks.end()) {
+      same->key.speculative = same->key.speculative && k.speculative;
+      continue;
+    }
     Task t;
     t.key = k;
     if (const auto prior = klt_priors_.find(k.id); prior != klt_priors_.end()) t.prior = prior->second;
@@ -789,7 +807,7 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
       if (!first_error) first_error = t.error;
       continue;
     }
-    two_view_.emplace(t.key.id, std::move(t.result));
+    (t.key.speculative ? speculative_ : two_view_).emplace(t.key.id, std::move(t.result));
   }
   if (first_error) std::rethrow_exception(first_error);
 }

@@ -154,6 +154,38 @@ TEST(TwoViewTasks, ComputedIdsAreKeptAndRepeatedIdsComputedOnce) {
   expect_same(FrameMatcher(s.on_route).two_view(2, s.keys[2]), *fm.computed_two_view(2), "key 2");
 }
 
+TEST(TwoViewTasks, SpeculativeResultsAreHeldBackUntilAskedFor) {
+  const Scene& s = scene();
+  const FrameMatcher::KeyRef refs[] = {{1, &s.keys[1]}, {2, &s.keys[2], true}};
+  {  // one thread: the speculative task is not computed at all
+    const CvThreads threads(1);
+    FrameMatcher fm(s.on_route);
+    fm.compute_two_views(refs);
+    EXPECT_NE(fm.computed_two_view(1), nullptr);
+    EXPECT_EQ(fm.computed_two_view(2), nullptr);
+    const double essential_ms = fm.timings().essential_ms;
+    fm.two_view(2, s.keys[2]);
+    EXPECT_GT(fm.timings().essential_ms, essential_ms);  // computed only now
+  }
+  const CvThreads threads(2);
+  FrameMatcher fm(s.on_route);
+  fm.compute_two_views(refs);
+  EXPECT_NE(fm.computed_two_view(1), nullptr);
+  EXPECT_EQ(fm.computed_two_view(2), nullptr);  // computed, held back
+  const double essential_ms = fm.timings().essential_ms;
+  const TwoViewMatches& asked = fm.two_view(2, s.keys[2]);
+  EXPECT_EQ(fm.timings().essential_ms, essential_ms);  // not computed again
+  EXPECT_EQ(fm.computed_two_view(2), &asked);
+  expect_same(FrameMatcher(s.on_route).two_view(2, s.keys[2]), asked, "key 2");
+  // Asked for by a later non-speculative mention.
+  FrameMatcher again(s.on_route);
+  again.compute_two_views(refs);
+  const FrameMatcher::KeyRef now[] = {{2, &s.keys[2]}};
+  again.compute_two_views(now);
+  ASSERT_NE(again.computed_two_view(2), nullptr);
+  expect_same(asked, *again.computed_two_view(2), "key 2 asked later");
+}
+
 TEST(TwoViewTasks, ErrorsAreThrownAfterTheOtherTasksAreDone) {
   const Scene& s = scene();
   const CvThreads threads(2);

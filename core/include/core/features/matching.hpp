@@ -215,6 +215,11 @@ class FrameMatcher {
   struct KeyRef {
     int64_t id = -1;
     const ImageFeatures* features = nullptr;
+    /// Computed only where the tasks run concurrently (concurrent()), and then held back until
+    /// two_view() asks for it: computed_two_view() does not see it before, so what the caller
+    /// does with the computed results (e.g. the navigator's KLT priors for the next frame)
+    /// stays what it was without the speculation.
+    bool speculative = false;
   };
   /// two_view() of several key images at once: those not computed yet are computed as
   /// concurrent tasks, one per key image (the first on the calling thread, each other one on a
@@ -240,7 +245,8 @@ class FrameMatcher {
   /// three-view sets keep using two_view().
   const TwoViewMatches& two_view_for_control(int64_t key_id, const ImageFeatures& key);
 
-  /// The cached two-view result of key_id, nullptr when two_view() was not called for it.
+  /// The cached two-view result of key_id, nullptr when two_view() was not called for it (nor
+  /// compute_two_views() without `speculative`).
   const TwoViewMatches* computed_two_view(int64_t key_id) const;
 
   /// nL, nP for (x, current, y): the three-view sets of the chain x -> current <- y (cached per
@@ -265,6 +271,7 @@ class FrameMatcher {
   const FeatureExtractor* wide_baseline_extractor_ = nullptr;  ///< null once used
   MatchTimings timings_;
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
+  std::unordered_map<int64_t, TwoViewMatches> speculative_;  ///< computed, not asked for yet
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
   std::unordered_map<int64_t, TwoViewMatches> control_;
