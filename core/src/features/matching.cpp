@@ -804,7 +804,9 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
     timings_.three_view_ms += t.timings.three_view_ms;
     timings_.wide_baseline_ms += t.timings.wide_baseline_ms;
     if (t.error) {
-      if (!first_error) first_error = t.error;
+      // A speculative task's error is dropped with it: two_view() recomputes that key when it
+      // is asked for, and throws then, as it would have without the speculation.
+      if (!first_error && !t.key.speculative) first_error = t.error;
       continue;
     }
     (t.key.speculative ? speculative_ : two_view_).emplace(t.key.id, std::move(t.result));

@@ -200,6 +200,12 @@ TEST(TwoViewTasks, ErrorsAreThrownAfterTheOtherTasksAreDone) {
   EXPECT_NE(fm.computed_two_view(1), nullptr);
   EXPECT_EQ(fm.computed_two_view(2), nullptr);
   EXPECT_NE(fm.computed_two_view(3), nullptr);
+  // A speculative task's error waits until its key is asked for, as without the speculation.
+  FrameMatcher held(s.on_route);
+  const FrameMatcher::KeyRef speculative_bad[] = {{1, &s.keys[1]}, {2, &no_image, true}};
+  EXPECT_NO_THROW(held.compute_two_views(speculative_bad));
+  EXPECT_NE(held.computed_two_view(1), nullptr);
+  EXPECT_THROW(held.two_view(2, no_image), std::invalid_argument);
 }
 
 }  // namespace

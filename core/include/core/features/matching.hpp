@@ -233,7 +233,8 @@ class FrameMatcher {
   /// essential RANSAC are most of a step (docs/method/navigator.md "Speed"); two tasks use
   /// the robot's second core (ARCHITECTURE.md: a task-parallel split behind a plain call).
   /// An id given twice is computed once. Throws std::invalid_argument for a null `features`
-  /// and what two_view() throws (the first task's error; the other results are then kept).
+  /// and what two_view() throws (the first task's error; the other results are then kept; a
+  /// speculative task's error only when two_view() asks for that key).
   void compute_two_views(std::span<const KeyRef> keys);
   /// Whether compute_two_views() runs its tasks concurrently (cv::getNumThreads() > 1).
   static bool concurrent();
