@@ -38,6 +38,13 @@
 //                              (features.matcher.essential.planar, camera pitch 0.18 rad).
 //   BM_RealNavigatorStep{Qvga,Vga}Fast    the same with the options of the app's `fast` preset
 //                              (planar model at pitch 0, KLT window 9 px; issue 22).
+//   BM_RealNavigatorStep{Qvga,Vga}TwoThreads  the defaults with OpenCV on 2 threads
+//                              (cv::setNumThreads(2) for the benchmark; IN and INN matched as two
+//                              concurrent tasks, FrameMatcher::compute_two_views): run it on two
+//                              cores (taskset -c 0,1) and read wall_p50_ms etc. (on a quiet
+//                              machine); its cpu_* counters count the calling thread only (the
+//                              step's work on the calling thread: the step cannot take less on
+//                              two free cores), process_cpu_* both threads (the total work).
 // Counters: per-step CPU time of the thread (clock_gettime(CLOCK_THREAD_CPUTIME_ID): one-core
 // figures even on a shared machine) cpu_p50_ms, cpu_p90_ms, cpu_p99_ms, cpu_max_ms, and the
 // median over the steps that ended navigating (cpu_nav_p50_ms), over the Edge_01 frames
@@ -45,7 +52,10 @@
 // (cpu_switch_p50_ms: the new segment's VNHV model, a new INN tracked without prior), over the
 // Edge_10 clutter frames (cpu_clutter_p50_ms), and the p99 over the steps that did not
 // (re)localise (cpu_noloc_p99_ms: each pass starts with an initial localisation, 3 of the 198
-// steps, which are the costliest and so cpu_p99_ms; their target is issue 22's own); the mean
+// steps, which are the costliest and so cpu_p99_ms; their target is issue 22's own); the
+// wall-clock quantiles per step (wall_p50_ms, wall_p90_ms, wall_p99_ms: the two-thread
+// variants' figures; on one thread they are the CPU figures plus whatever the load took) and the
+// process's CPU time per step (process_cpu_p50_ms, process_cpu_p99_ms: all threads); the mean
 // wall-clock split from the telemetry (StageTimings: extract_ms, match_ms, localize_ms,
 // control_ms, total_ms, and within match_ms and localize_ms the current frame's matching split
 // lines_ms, klt_ms, essential_ms, three_view_ms, wide_ms (ORB matching); wall time, inflated
@@ -180,6 +190,18 @@ double thread_cpu_ms() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
+double process_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+double wall_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
 double quantile(const std::vector<double>& sorted, double q) {
   if (sorted.empty()) return 0.0;
   return sorted[static_cast<size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5)];
@@ -196,16 +218,20 @@ void step_sequence(benchmark::State& state, const Sequence& seq,
   int n_route = 0, n_route_nav = 0, n_clutter = 0, n_clutter_nav = 0;
   int n_passes = 0, n_switched = 0, max_in = -1;
   std::vector<double> cpu_ms, cpu_nav_ms, cpu_route_ms, cpu_clutter_ms;
-  std::vector<double> cpu_steady_ms, cpu_switch_ms, cpu_no_loc_ms;
+  std::vector<double> cpu_steady_ms, cpu_switch_ms, cpu_no_loc_ms, step_wall_ms, process_ms;
   for (auto _ : state) {
     core::Frame f;
     f.gray = seq.frames[i];
     f.t_ns = t_ns;
     f.index = index++;
     t_ns += kFrameSpacingNs;
+    const double wall0_ms = wall_ms();
+    const double process0_ms = process_cpu_ms();
     const double cpu0_ms = thread_cpu_ms();
     const auto r = nav.step(f);
     const double step_ms = thread_cpu_ms() - cpu0_ms;
+    process_ms.push_back(process_cpu_ms() - process0_ms);
+    step_wall_ms.push_back(wall_ms() - wall0_ms);
     benchmark::DoNotOptimize(r.command.omega_rad_s);
     cpu_ms.push_back(step_ms);
     const auto& tm = r.telemetry.timings;
@@ -290,6 +316,27 @@ void step_sequence(benchmark::State& state, const Sequence& seq,
   state.counters["cpu_steady_p50_ms"] = quantile(cpu_steady_ms, 0.5);
   state.counters["cpu_switch_p50_ms"] = quantile(cpu_switch_ms, 0.5);
   state.counters["cpu_noloc_p99_ms"] = quantile(cpu_no_loc_ms, 0.99);
+  std::sort(step_wall_ms.begin(), step_wall_ms.end());
+  state.counters["wall_p50_ms"] = quantile(step_wall_ms, 0.5);
+  state.counters["wall_p90_ms"] = quantile(step_wall_ms, 0.9);
+  state.counters["wall_p99_ms"] = quantile(step_wall_ms, 0.99);
+  std::sort(process_ms.begin(), process_ms.end());
+  state.counters["process_cpu_p50_ms"] = quantile(process_ms, 0.5);
+  state.counters["process_cpu_p99_ms"] = quantile(process_ms, 0.99);
+}
+
+// The same pass with OpenCV's threads at `threads` for the benchmark's duration (the program
+// runs on one otherwise): the navigator matches IN and INN as two concurrent tasks
+// (FrameMatcher::compute_two_views) and OpenCV's KLT splits its points over the threads.
+void step_sequence_threads(benchmark::State& state, const Sequence& seq, int threads) {
+  cv::setNumThreads(threads);
+  try {
+    step_sequence(state, seq);
+  } catch (...) {
+    cv::setNumThreads(1);
+    throw;
+  }
+  cv::setNumThreads(1);
 }
 
 void BM_RealNavigatorStepQvga(benchmark::State& state) { step_sequence(state, qvga_sequence()); }
@@ -297,6 +344,21 @@ BENCHMARK(BM_RealNavigatorStepQvga)->Unit(benchmark::kMillisecond)->Iterations(k
 
 void BM_RealNavigatorStepVga(benchmark::State& state) { step_sequence(state, vga_sequence()); }
 BENCHMARK(BM_RealNavigatorStepVga)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+
+void BM_RealNavigatorStepQvgaTwoThreads(benchmark::State& state) {
+  step_sequence_threads(state, qvga_sequence(), 2);
+}
+BENCHMARK(BM_RealNavigatorStepQvgaTwoThreads)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(kIterations)
+    ->UseRealTime();
+void BM_RealNavigatorStepVgaTwoThreads(benchmark::State& state) {
+  step_sequence_threads(state, vga_sequence(), 2);
+}
+BENCHMARK(BM_RealNavigatorStepVgaTwoThreads)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(kIterations)
+    ->UseRealTime();
 
 // The planar-motion 2-point essential model (features.matcher.essential.planar; since issue 22
 // its candidates are refitted with the general five-point model, general_refit) with this

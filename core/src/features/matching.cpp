@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 // The core runs single-threaded (ARCHITECTURE.md): no OpenMP inside Eigen products.
 #ifndef EIGEN_DONT_PARALLELIZE
@@ -15,6 +17,7 @@
 #endif
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/core/hal/hal.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -720,11 +723,95 @@ void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior) 
 const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures& key) {
   auto it = two_view_.find(key_id);
   if (it != two_view_.end()) return it->second;
+  if (const auto held = speculative_.find(key_id); held != speculative_.end()) {
+    it = two_view_.emplace(key_id, std::move(held->second)).first;
+    speculative_.erase(held);
+    return it->second;
+  }
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
   return two_view_.emplace(key_id, match_two_view(key, current_, options_, p, &timings_))
       .first->second;
+}
+
+bool FrameMatcher::concurrent() { return cv::getNumThreads() > 1; }
+
+void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
+  struct Task {
+    KeyRef key;
+    std::span<const PointMatch> prior;
+    TwoViewMatches result;
+    MatchTimings timings;
+    std::exception_ptr error;
+  };
+  std::vector<Task> tasks;
+  tasks.reserve(keys.size());
+  for (const KeyRef& k : keys) {
+    if (k.features == nullptr)
+      throw std::invalid_argument("FrameMatcher::compute_two_views: key " + std::to_string(k.id) +
+                                  " has no features");
+    if (two_view_.count(k.id) != 0) continue;
+    if (k.speculative && !concurrent()) continue;  // on one thread: work for nothing
+    if (const auto held = speculative_.find(k.id); held != speculative_.end()) {
+      if (!k.speculative) {  // asked for now: as two_view() would
+        two_view_.emplace(k.id, std::move(held->second));
+        speculative_.erase(held);
+      }
+      continue;
+    }
+    // An id given twice is computed once, held back only if every mention is speculative.
+    if (const auto same = std::find_if(tasks.begin(), tasks.end(),
+                                       [&](const Task& t) { return t.key.id == k.id; });
+        same != tasks.end()) {
+      same->key.speculative = same->key.speculative && k.speculative;
+      continue;
+    }
+    Task t;
+    t.key = k;
+    if (const auto prior = klt_priors_.find(k.id); prior != klt_priors_.end()) t.prior = prior->second;
+    tasks.push_back(std::move(t));
+  }
+  if (tasks.empty()) return;
+  // Each task reads the current frame, its key image and its prior and writes only its own
+  // Task: no shared state (OpenCV's KLT and RANSAC are reentrant and deterministic).
+  auto run = [&](Task& t) noexcept {
+    try {
+      t.result = match_two_view(*t.key.features, current_, options_, t.prior, &t.timings);
+    } catch (...) {
+      t.error = std::current_exception();
+    }
+  };
+  // The first task on the calling thread, each other one on a thread of its own, joined here.
+  // Plain threads rather than cv::parallel_for_: a TBB caller that finishes first spins until
+  // the other task is done (measured: its CPU time did not fall), and the spin takes the core
+  // from whatever else runs. cv::getNumThreads() <= 1 (the one-core benchmarks) keeps
+  // everything on the calling thread.
+  std::vector<std::thread> helpers;
+  if (concurrent()) {
+    helpers.reserve(tasks.size() - 1);
+    for (size_t i = 1; i < tasks.size(); ++i) helpers.emplace_back(run, std::ref(tasks[i]));
+    run(tasks.front());
+    for (std::thread& h : helpers) h.join();
+  } else {
+    for (Task& t : tasks) run(t);
+  }
+  std::exception_ptr first_error;
+  for (Task& t : tasks) {  // in the callers' order, whichever task finished first
+    timings_.lines_ms += t.timings.lines_ms;
+    timings_.klt_ms += t.timings.klt_ms;
+    timings_.essential_ms += t.timings.essential_ms;
+    timings_.three_view_ms += t.timings.three_view_ms;
+    timings_.wide_baseline_ms += t.timings.wide_baseline_ms;
+    if (t.error) {
+      // A speculative task's error is dropped with it: two_view() recomputes that key when it
+      // is asked for, and throws then, as it would have without the speculation.
+      if (!first_error && !t.key.speculative) first_error = t.error;
+      continue;
+    }
+    (t.key.speculative ? speculative_ : two_view_).emplace(t.key.id, std::move(t.result));
+  }
+  if (first_error) std::rethrow_exception(first_error);
 }
 
 const TwoViewMatches& FrameMatcher::two_view_for_control(int64_t key_id, const ImageFeatures& key) {

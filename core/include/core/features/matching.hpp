@@ -25,7 +25,8 @@
 // matching) runs once per frame whatever the number of three-view queries.
 // Indices: LineMatch/PointMatch indices refer to each view's ImageFeatures::lines, corners_px
 // (KLT) or keypoints (wide baseline). Normalised coordinates use each view's own intrinsics.
-// Thread-safety: free functions are reentrant; a FrameMatcher is not thread-safe (one per frame).
+// Thread-safety: free functions are reentrant; a FrameMatcher is not thread-safe (one per frame;
+// FrameMatcher::compute_two_views runs its own tasks concurrently and joins them before returning).
 
 #include <cstdint>
 #include <string>
@@ -210,6 +211,34 @@ class FrameMatcher {
   /// n(key, current): verified lines + KLT points (cached per key id).
   const TwoViewMatches& two_view(int64_t key_id, const ImageFeatures& key);
 
+  /// A key image for compute_two_views(): its id and features (which must outlive the call).
+  struct KeyRef {
+    int64_t id = -1;
+    const ImageFeatures* features = nullptr;
+    /// Computed only where the tasks run concurrently (concurrent()), and then held back until
+    /// two_view() asks for it: computed_two_view() does not see it before, so what the caller
+    /// does with the computed results (e.g. the navigator's KLT priors for the next frame)
+    /// stays what it was without the speculation.
+    bool speculative = false;
+  };
+  /// two_view() of several key images at once: those not computed yet are computed as
+  /// concurrent tasks, one per key image (the first on the calling thread, each other one on a
+  /// thread started and joined by this call; with cv::getNumThreads() <= 1, as after
+  /// cv::setNumThreads(1), all on the calling thread, one after the other); the call returns
+  /// when all are done. The results are the same as
+  /// two_view() called for each in turn: each is a function of its key image, the current
+  /// frame, the options and that key's prior only, and the tasks share nothing else (their
+  /// MatchTimings are added to timings() afterwards: the stages' sums then exceed the call's
+  /// wall-clock time). Why: the navigator needs IN and INN on every frame, and their KLT and
+  /// essential RANSAC are most of a step (docs/method/navigator.md "Speed"); two tasks use
+  /// the robot's second core (ARCHITECTURE.md: a task-parallel split behind a plain call).
+  /// An id given twice is computed once. Throws std::invalid_argument for a null `features`
+  /// and what two_view() throws (the first task's error; the other results are then kept; a
+  /// speculative task's error only when two_view() asks for that key).
+  void compute_two_views(std::span<const KeyRef> keys);
+  /// Whether compute_two_views() runs its tasks concurrently (cv::getNumThreads() > 1).
+  static bool concurrent();
+
   /// two_view() for the control law and the scale ratio: when KLT verified fewer points than
   /// orb_fallback_below_points and both images carry ORB keypoints, the same lines with the
   /// wide-baseline points if those are more and at least orb_fallback_below_points
@@ -217,7 +246,8 @@ class FrameMatcher {
   /// three-view sets keep using two_view().
   const TwoViewMatches& two_view_for_control(int64_t key_id, const ImageFeatures& key);
 
-  /// The cached two-view result of key_id, nullptr when two_view() was not called for it.
+  /// The cached two-view result of key_id, nullptr when two_view() was not called for it (nor
+  /// compute_two_views() without `speculative`).
   const TwoViewMatches* computed_two_view(int64_t key_id) const;
 
   /// nL, nP for (x, current, y): the three-view sets of the chain x -> current <- y (cached per
@@ -242,6 +272,7 @@ class FrameMatcher {
   const FeatureExtractor* wide_baseline_extractor_ = nullptr;  ///< null once used
   MatchTimings timings_;
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
+  std::unordered_map<int64_t, TwoViewMatches> speculative_;  ///< computed, not asked for yet
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
   std::unordered_map<int64_t, TwoViewMatches> control_;
