@@ -53,6 +53,12 @@ const fewShown = () => {
   return !el.hidden && !!el.querySelector('li[data-kind="few_features"]');
 };
 const noneShown = () => document.getElementById('teach-feedback').hidden;
+// Shown and the bare wall really in view (a passing dip while turning also warns, for a moment).
+const fewShownFacingBare = () => {
+  const t = window.teachUi.state.teach || {};
+  const el = document.getElementById('teach-feedback');
+  return !el.hidden && !!el.querySelector('li[data-kind="few_features"]') && t.n_lines + t.n_points < 40;
+};
 
 async function main() {
   const server = await startServer(opts.app, ['teach', '--robot', `mock:${opts.world}`,
@@ -73,7 +79,8 @@ async function main() {
     let appeared = null;
     await run.step('turning to the bare wall: the few-features warning appears and says what to do', async () => {
       const from = server.events.length;
-      await turnUntil(page, 'ArrowLeft', fewShown, 20000, 'the few-features warning');
+      await turnUntil(page, 'ArrowLeft', fewShownFacingBare, 20000, 'the few-features warning facing the bare wall');
+      await page.waitForFunction(fewShown, null, { timeout: 5000 });  // and still shown once stopped
       const w = await shownWarnings(page);
       const few = w.find((x) => x.kind === 'few_features');
       if (!/poster/.test(few.text) || !/needs \d+/.test(few.text)) throw new Error(`text "${few.text}"`);
