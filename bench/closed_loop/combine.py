@@ -24,6 +24,9 @@ table per world (a row per disturbance) coloured against issue 26's targets (gre
 succeeded with lateral RMS <= 5 cm and max <= 15 cm; amber: all succeeded, accuracy over a
 target; red: a run failed), each row linked to that configuration's report and showing its top
 view when `evaluate --plots` wrote one beside the JSON (matrix.sh: DIR/NAME.json and DIR/NAME/).
+Each failed run in the first table, and each row's runs (failed ones first, framed in red), show
+that run's own small top view (`evaluate --plots` writes PREFIX + run<N>_top_view.png, PREFIX =
+world_features_[disturbances_]); a report written before those existed gets a note instead.
 """
 import argparse
 import html
@@ -50,6 +53,12 @@ def disturbance_name(e):
     return "+".join(names) or "none"
 
 
+def plots_prefix(e):
+    """The file-name prefix `evaluate --plots` gives an evaluation's plots (cmd_evaluate.cpp)."""
+    dist = "+".join(e["disturbances"])
+    return f"{e['world']}_{e['features']}_" + (f"{dist}_" if dist else "")
+
+
 def key_of(e):
     return (e["world"], e["features"], e["controller"], e["size"], disturbance_name(e))
 
@@ -67,7 +76,7 @@ def main():
     ap.add_argument("--html", help="also write an HTML index of the matrix (see above)")
     a = ap.parse_args()
     merged = {}
-    reports = {}  # key -> the configuration's report folder (evaluate --plots), if any
+    reports = {}  # key -> (the configuration's report folder (evaluate --plots), plots prefix)
     for f in a.files:
         with open(f) as fh:
             doc = json.load(fh)
@@ -75,7 +84,7 @@ def main():
         for e in doc["evaluations"]:
             k = key_of(e)
             if plots and os.path.isfile(os.path.join(plots, "report.html")):
-                reports.setdefault(k, plots)
+                reports.setdefault(k, (plots, plots_prefix(e)))
             if k not in merged:
                 merged[k] = dict(e, runs=[])
             known = {r["index"] for r in merged[k]["runs"]}
@@ -178,20 +187,49 @@ def write_html(path, merged, reports, drift):
     def link(k, text):
         if k not in reports:
             return html.escape(text)
-        href = os.path.relpath(os.path.join(reports[k], "report.html"), base)
+        href = os.path.relpath(os.path.join(reports[k][0], "report.html"), base)
         return f'<a href="{html.escape(href)}">{html.escape(text)}</a>'
 
+    def image(k, name):
+        """The report's PNG `name` (prefixed as evaluate writes it; unprefixed in old reports),
+        relative to the index, or None."""
+        if k not in reports:
+            return None
+        folder, prefix = reports[k]
+        for f in (prefix + name, name):
+            if os.path.isfile(os.path.join(folder, f)):
+                return os.path.relpath(os.path.join(folder, f), base)
+        return None
+
     def thumb(k):
-        if k not in reports or not os.path.isfile(os.path.join(reports[k], "top_view.png")):
+        src = image(k, "top_view.png")
+        return f'<img src="{html.escape(src)}" alt="top view" loading="lazy">' if src else ""
+
+    def run_thumb(k, r):
+        src = image(k, f"run{r['index'] + 1}_top_view.png")
+        if not src:
+            return None
+        what = f"run {r['index'] + 1}: " + ("ok" if r["success"] else r["outcome"])
+        cls = "run" if r["success"] else "run failed"
+        return (f"<figure class='{cls}'><img src=\"{html.escape(src)}\" alt=\"{html.escape(what)}\" "
+                f"loading='lazy'><figcaption>{html.escape(what)}</figcaption></figure>")
+
+    def runs_cell(k, runs):
+        if k not in reports:
             return ""
-        src = os.path.relpath(os.path.join(reports[k], "top_view.png"), base)
-        return f'<img src="{html.escape(src)}" alt="top view" loading="lazy">'
+        figs = [run_thumb(k, r) for r in sorted(runs, key=lambda r: (r["success"], r["index"]))]
+        if not any(figs):
+            return ("<small>no per-run top views in this report (written before `evaluate --plots` "
+                    "drew one per run): re-run the configuration</small>")
+        return "".join(f for f in figs if f)
 
     out = ["<!doctype html><meta charset='utf-8'><title>Closed-loop matrix</title><style>",
            "body{font:14px sans-serif;margin:20px}table{border-collapse:collapse;margin:8px 0 24px}",
            "td,th{border:1px solid #ccc;padding:4px 8px;vertical-align:top}",
            ".ok{background:#dcfce7}.over{background:#fef3c7}.fail{background:#fee2e2}",
-           "img{width:220px}</style>",
+           "img{width:220px}figure.run{display:inline-block;margin:2px;text-align:center}",
+           "figure.run img{width:150px;border:2px solid #ccc}figure.failed img{border-color:#dc2626}",
+           "figcaption{font-size:11px}</style>",
            "<h1>Closed-loop matrix</h1>",
            f"<p>Targets (issue 26): every run succeeds, lateral RMS &le; {TARGET_RMS_M * 100:.0f} cm, "
            f"max &le; {TARGET_MAX_M * 100:.0f} cm once converged. Green: met; amber: all runs "
@@ -202,11 +240,13 @@ def write_html(path, merged, reports, drift):
              if not r["success"]]
     out.append(f"<h2 id='failures'>Failed runs ({len(fails)})</h2>")
     if fails:
-        out.append("<table><tr><th>world</th><th>disturbance</th><th>run</th><th>how it ended</th></tr>")
+        out.append("<table><tr><th>world</th><th>disturbance</th><th>run</th><th>how it ended</th>"
+                   "<th>top view of the run</th></tr>")
         for k, r in fails:
             out.append(f"<tr class='fail'><td>{link(k, k[0])}</td><td>{html.escape(k[4])}</td>"
                        f"<td>{r['index'] + 1}</td><td>{html.escape(r['outcome'])} at "
-                       f"{r['travelled_m']:.1f} m {html.escape(r.get('detail') or '')}</td></tr>")
+                       f"{r['travelled_m']:.1f} m {html.escape(r.get('detail') or '')}</td>"
+                       f"<td>{run_thumb(k, r) or ''}</td></tr>")
         out.append("</table>")
     else:
         out.append("<p>none</p>")
@@ -216,14 +256,15 @@ def write_html(path, merged, reports, drift):
     for w in sorted(worlds):
         out.append(f"<h2>{html.escape(w[0])} <small>({html.escape(' / '.join(w[1:]))})</small></h2>")
         out.append("<table><tr><th>disturbance</th><th>success</th><th>lateral RMS / max (cm)</th>"
-                   "<th>step ms (per-run medians)</th><th>top view</th></tr>")
+                   "<th>step ms (per-run medians)</th><th>top view</th>"
+                   "<th>each run (failures first)</th></tr>")
         for k in sorted(worlds[w], key=lambda k: k[4]):
             runs, ok, mean_rms, worst, verdict = row_stats(merged[k])
             steps = [r["step_ms_median"] for r in runs if r["step_ms_median"] is not None]
             out.append(f"<tr class='{verdict}'><td>{link(k, k[4])}</td><td>{len(ok)}/{len(runs)}</td>"
                        f"<td>{fmt(mean_rms, 100)} / {fmt(worst, 100)}</td>"
                        f"<td>{fmt(min(steps)) if steps else '-'}-{fmt(max(steps)) if steps else '-'}</td>"
-                       f"<td>{thumb(k)}</td></tr>")
+                       f"<td>{thumb(k)}</td><td>{runs_cell(k, runs)}</td></tr>")
         out.append("</table>")
     tmp = path + ".tmp"
     with open(tmp, "w") as fh:

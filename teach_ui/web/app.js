@@ -70,6 +70,7 @@
   function setLive(live) {
     ui.live = live;
     $('banner-offline').hidden = live;
+    if (!live) $('teach-feedback').hidden = true;  // a live warning without the app is not live
     document.body.classList.toggle('offline', !live);
     document.querySelectorAll('.panel button, .pad-btn, #v-max, #w-max').forEach((b) => {
       b.disabled = !live;
@@ -379,6 +380,7 @@
       lastRobotWarning = s.robot_warning;
     }
     if ('teach' in patch || 'warnings' in patch || 'drive' in patch) renderTeach();
+    if ('teach_feedback' in patch) renderFeedback();
     if ('offline' in patch) drawTopView();
     if ('map_summary' in patch) renderSummary();
     if ('replay' in patch) renderReplay();
@@ -417,6 +419,25 @@
       li.textContent = w;
       return li;
     }));
+  }
+
+  // Live teach warnings: shown while the app reports them (it clears them itself, with a short
+  // hold against blinking); a new kind is also written to the log once.
+  let feedbackKinds = new Set();
+  function renderFeedback() {
+    const list = ((ui.state.teach_feedback || {}).warnings || []);
+    const el = $('teach-feedback');
+    el.hidden = list.length === 0;
+    el.replaceChildren(...list.map((w) => {
+      const li = document.createElement('li');
+      li.className = `fb-${w.kind}`;
+      li.dataset.kind = w.kind;
+      li.textContent = w.text;
+      return li;
+    }));
+    const kinds = new Set(list.map((w) => w.kind));
+    for (const w of list) if (!feedbackKinds.has(w.kind)) logLine(`teach warning: ${w.text}`);
+    feedbackKinds = kinds;
   }
 
   function renderSummary() {
@@ -568,6 +589,38 @@
   }
 
   // ------------------------------------------------------------------ offline top view
+  const LABEL_GAP_PX = 16;
+  const HOVER_RADIUS_PX = 9;
+  let topViewKeys = [];  // key-image marks in canvas pixels: {index, x, y}
+
+  // The key image under the pointer (nearest mark within HOVER_RADIUS_PX), shown with its
+  // thumbnail (the `key/<index>` image the app sent) and its figures when known.
+  function onTopViewHover(ev) {
+    const canvas = $('topview');
+    const r = canvas.getBoundingClientRect();
+    const px = (ev.clientX - r.left) * canvas.width / r.width;
+    const py = (ev.clientY - r.top) * canvas.height / r.height;
+    let best = null; let bestD = HOVER_RADIUS_PX;
+    for (const k of topViewKeys) {
+      const d = Math.hypot(k.x - px, k.y - py);
+      if (d <= bestD) { best = k; bestD = d; }
+    }
+    const tip = $('topview-tip');
+    if (!best) { tip.hidden = true; ui.topViewHover = null; return; }
+    const img = $('topview-tip-img');
+    const src = images.get(`key/${best.index}`);
+    if (src) img.src = src; else img.removeAttribute('src');
+    const info = ((ui.state.teach || {}).key_images || []).find((k) => k.index === best.index) || {};
+    const facts = info.n_lines !== undefined ? ` · ${info.n_lines} lines, ${info.n_points} points` : '';
+    $('topview-tip-text').textContent = `key image ${best.index}${facts}${src ? '' : ' (no image)'}`;
+    // Beside the mark, kept inside the canvas box.
+    const cssX = best.x * r.width / canvas.width; const cssY = best.y * r.height / canvas.height;
+    tip.hidden = false;
+    tip.style.left = `${Math.min(cssX + 12, r.width - tip.offsetWidth)}px`;
+    tip.style.top = `${Math.max(0, cssY - tip.offsetHeight - 8)}px`;
+    ui.topViewHover = best.index;
+  }
+
   function drawTopView() {
     const canvas = $('topview');
     const ctx = canvas.getContext('2d');
@@ -583,6 +636,7 @@
     const plan = ui.state.floor_plan || {};
     const walls = plan.walls || []; const boxes = plan.boxes || [];
     if (!all.length) {
+      topViewKeys = []; ui.topViewKeys = [];
       ctx.fillStyle = '#6b7280'; ctx.font = '13px sans-serif';
       ctx.fillText('no trajectory yet', 16, 24);
       return;
@@ -628,6 +682,25 @@
     for (const [x, y] of keys) { ctx.beginPath(); ctx.arc(tx(x), ty(y), 3.5, 0, 2 * Math.PI); ctx.fill(); }
     path(taught, '#2563eb', 3, []);
     path(replayed, '#f97316', 2, [6, 4]);
+    // Their numbers (the key image's index, as on the console and in the strip) beside the marks,
+    // over the paths; where marks crowd, only those at least LABEL_GAP_PX from the last number
+    // drawn get one (hovering any mark still shows it).
+    topViewKeys = keys.map(([x, y], i) => ({ index: i, x: tx(x), y: ty(y) }));
+    ctx.font = 'bold 11px sans-serif'; ctx.textBaseline = 'bottom';
+    let lastLabel = null;
+    for (const k of topViewKeys) {
+      if (lastLabel && Math.hypot(k.x - lastLabel.x, k.y - lastLabel.y) < LABEL_GAP_PX
+          && k.index !== topViewKeys.length - 1) continue;
+      const label = String(k.index);
+      const w = ctx.measureText(label).width;
+      ctx.fillStyle = 'rgba(255,255,255,0.85)';
+      ctx.fillRect(k.x + 4, k.y - 16, w + 4, 13);
+      ctx.fillStyle = '#111827';
+      ctx.fillText(label, k.x + 6, k.y - 3);
+      lastLabel = k;
+    }
+    ctx.textBaseline = 'alphabetic';
+    ui.topViewKeys = topViewKeys;
     // Where the replay drove on odometry alone (vision blind): red dots over the replayed path.
     const blind = tr.blind || [];
     ctx.fillStyle = '#dc2626';
@@ -790,6 +863,8 @@
   });
   $('btn-finish').addEventListener('click', () => send({ type: 'finish_teach' }));
   $('btn-replay').addEventListener('click', () => send({ type: 'start_replay' }));
+  $('topview').addEventListener('mousemove', onTopViewHover);
+  $('topview').addEventListener('mouseleave', () => { $('topview-tip').hidden = true; ui.topViewHover = null; });
   $('v-max').addEventListener('input', showLimits);
   $('w-max').addEventListener('input', showLimits);
 

@@ -21,9 +21,10 @@ def run(index, success, rms_m, max_m, corrected_m=None, outcome=None, light_fact
 
 
 def evaluation(world, disturbance, runs):
+    # As evaluate writes it: no disturbance is an empty list (shown as "none").
     return {"format": "pepper.evaluation", "version": 1, "evaluations": [
         {"world": world, "features": "lines+points", "controller": "vnhv", "size": "640x480",
-         "disturbances": [disturbance], "runs": runs}]}
+         "disturbances": [] if disturbance == "none" else [disturbance], "runs": runs}]}
 
 
 def main():
@@ -49,10 +50,17 @@ def main():
                                                    run(1, True, 0.01, 0.03, light_factor=1.4)]), fh)
         with open(over, "w") as fh:
             json.dump(evaluation("hall", "person", [run(0, True, 0.08, 0.20)]), fh)
-        # The good configuration has its report beside it (matrix.sh: DIR/NAME/).
-        os.makedirs(os.path.join(d, "room_none"))
-        for name in ("report.html", "top_view.png"):
-            open(os.path.join(d, "room_none", name), "w").close()
+        # Reports beside the JSON (matrix.sh: DIR/NAME/), files named as evaluate --plots names
+        # them (PREFIX = world_features_[disturbances_]): the good configuration and the failed
+        # one with a top view per run; hall's report predates those (combined top view only).
+        reports = {"room_none": ("room_lines+points_", 2), "room_light0.6": ("room_lines+points_light_", 2),
+                   "hall_person": ("hall_lines+points_person_", 0)}
+        for folder, (prefix, n_runs) in reports.items():
+            os.makedirs(os.path.join(d, folder))
+            names = ["report.html", prefix + "top_view.png"]
+            names += [f"{prefix}run{i}_top_view.png" for i in range(1, n_runs + 1)]
+            for name in names:
+                open(os.path.join(d, folder, name), "w").close()
         index = os.path.join(d, "index.html")
         r = subprocess.run([sys.executable, COMBINE, good, bad, bright, over, "--html", index],
                            capture_output=True, text=True)
@@ -68,7 +76,20 @@ def main():
         check("<tr class='fail'>" in page, "a red row for the failed configuration")
         check("<tr class='over'>" in page, "an amber row for the configuration over the accuracy target")
         check("<tr class='ok'><td><a href=\"room_none/report.html\">none</a>" in page, "a green row linking its report")
-        check('src="room_none/top_view.png"' in page, "the top view shown")
+        check('src="room_none/room_lines+points_top_view.png"' in page, "the top view shown")
+        # The failed run (room light x0.6, run 2) with its own top view in the failures table.
+        fail_row = page[page.index("<tr class='fail'><td>"):] if "<tr class='fail'><td>" in page else ""
+        fail_row = fail_row[:fail_row.index("</tr>")] if fail_row else ""
+        check('room_light0.6/room_lines+points_light_run2_top_view.png' in fail_row,
+              "the failed run's own top view in the failures table: " + fail_row)
+        # In its configuration's row, run 2 (failed) comes before run 1.
+        row = page[page.rindex("<tr class='fail'>"):]
+        row = row[:row.index("</tr>")]
+        check(0 <= row.find("light_run2_top_view") < row.find("light_run1_top_view")
+              and "figure class='run failed'" in row, "failed runs first in the row: " + row)
+        check('room_none/room_lines+points_run1_top_view.png' in page
+              and 'room_none/room_lines+points_run2_top_view.png' in page, "every run of room/none shown")
+        check("no per-run top views in this report" in page, "a note where a report has none")
     for f in failures:
         print("FAIL", f)
     print("ok" if not failures else f"{len(failures)} failed")

@@ -208,6 +208,50 @@ async function main() {
       return file;
     });
 
+    await run.step('top view: key images are numbered marks, hovering one shows its thumbnail', async () => {
+      const keys = await page.evaluate(() => window.teachUi.topViewKeys || []);
+      if (keys.length !== 12) throw new Error(`expected 12 key-image marks, got ${keys.length}`);
+      const box = await page.locator('#topview').boundingBox();
+      const size = await page.evaluate(() => [document.getElementById('topview').width,
+        document.getElementById('topview').height]);
+      const at = (k) => [box.x + k.x * box.width / size[0], box.y + k.y * box.height / size[1]];
+      // Away from every mark: no thumbnail.
+      await page.mouse.move(box.x + 3, box.y + 3);
+      if (!(await page.isHidden('#topview-tip'))) throw new Error('a thumbnail is shown away from the marks');
+      const seen = [];
+      for (const i of [3, 11]) {
+        const [x, y] = at(keys[i]);
+        await page.mouse.move(x, y);
+        await page.waitForSelector('#topview-tip:not([hidden])', { timeout: 3000 });
+        const tip = await page.evaluate(() => {
+          const img = document.getElementById('topview-tip-img');
+          return { text: document.getElementById('topview-tip-text').textContent, src: img.getAttribute('src'),
+            loaded: img.complete && img.naturalWidth > 0, hover: window.teachUi.topViewHover };
+        });
+        // The thumbnail is the key image's own (the `key/<i>` image the strip shows too).
+        const stripSrc = await page.getAttribute(`#key-strip .key:nth-child(${i + 1}) img`, 'src');
+        if (tip.hover !== i || !tip.text.startsWith(`key image ${i} `)) throw new Error(`hovering mark ${i}: ${JSON.stringify(tip)}`);
+        if (!tip.src || tip.src !== stripSrc) throw new Error(`mark ${i} shows ${tip.src}, the strip's key image ${i} is ${stripSrc}`);
+        await page.waitForFunction(() => {
+          const img = document.getElementById('topview-tip-img'); return img.complete && img.naturalWidth > 0;
+        }, null, { timeout: 3000 });
+        seen.push(tip.text);
+      }
+      await page.screenshot({ path: join(artifacts, 'teach_ui_topview_hover.png'), fullPage: true });
+      await page.mouse.move(box.x + box.width + 40, box.y);  // off the canvas
+      await page.waitForSelector('#topview-tip', { state: 'hidden', timeout: 3000 });
+      // The numbers are drawn: dark text pixels beside mark 0 (none of the paths is that dark).
+      const dark = await page.evaluate((k) => {
+        const c = document.getElementById('topview');
+        const d = c.getContext('2d').getImageData(Math.round(k.x + 4), Math.round(k.y - 16), 12, 13).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] < 60 && d[i + 1] < 60 && d[i + 2] < 60) n++;
+        return n;
+      }, keys[0]);
+      if (dark < 5) throw new Error(`no number drawn beside key image 0 (${dark} dark pixels)`);
+      return seen.join('; ');
+    });
+
     await run.step('replay page raised no script errors', async () => {
       if (browser.consoleErrors.length) throw new Error(browser.consoleErrors.join('\n'));
     });

@@ -115,6 +115,7 @@ int run_demo(const DemoArgs& args) {
     to.camera = camera_request(config);
     to.head = head_request(config, mode);
     to.teach = config.teach_options();
+    to.feedback = teach_feedback_limits(config, to.min_key_features);
     to.config_json = config_to_json(config).dump();
     to.scripted = true;
     to.max_distance_m = a.max_distance_m;

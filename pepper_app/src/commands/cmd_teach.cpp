@@ -100,6 +100,7 @@ int run_teach(const TeachArgs& a) {
     o.camera = camera_request(config);
     o.head = head_request(config, mode);
     o.teach = config.teach_options();
+    o.feedback = teach_feedback_limits(config, o.min_key_features);
     o.config_json = config_to_json(config).dump();
     const bool ui_wanted = a.common.ui || a.common.ui_port >= 0;
     o.scripted = a.scripted || (robot.mock && !a.manual && !ui_wanted);

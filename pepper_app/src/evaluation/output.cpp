@@ -192,8 +192,11 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
   };
   const cv::Scalar grey(150, 150, 150), black(30, 30, 30);
 
-  // Top view: walls, furniture footprints, taught path, replayed paths, starts.
-  {
+  // Top view: walls, furniture footprints, taught path, replayed paths; one with every run, and a
+  // small one per run (`run<N>_top_view.png`) for the matrix index (combine.py --html), where a
+  // failed run is seen on its own with a red mark where it ended.
+  auto top_view = [&](const std::vector<const RunResult*>& runs, const std::string& title,
+                      int width_px, int height_px) {
     std::vector<report::Series> s;
     for (size_t i = 0; i < world.walls.size(); ++i) {
       const auto& w = world.walls[i];
@@ -216,10 +219,11 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
     s.push_back(taught);
     // Where each run drove on odometry alone (vision blind, issue 29), as markers over the paths.
     report::Series blind{"driven on odometry alone", {}, {}, cv::Scalar(0, 0, 220), 1, true};
-    for (const RunResult& r : e.runs) {
-      report::Series rs{"run " + std::to_string(r.index + 1) + (r.success ? "" : " (" + r.outcome + ")"),
-                        {}, {}, report::palette(r.index + 1), 1};
-      for (const RunSample& smp : r.samples) {
+    report::Series ended{"", {}, {}, cv::Scalar(0, 0, 255), 4, true};
+    for (const RunResult* r : runs) {
+      report::Series rs{"run " + std::to_string(r->index + 1) + (r->success ? "" : " (" + r->outcome + ")"),
+                        {}, {}, report::palette(r->index + 1), 1};
+      for (const RunSample& smp : r->samples) {
         rs.x.push_back(smp.x_m);
         rs.y.push_back(smp.y_m);
         if (smp.dead_reckoning) {
@@ -227,12 +231,27 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
           blind.y.push_back(smp.y_m);
         }
       }
+      if (!r->success && !r->samples.empty()) {
+        ended.label = "where it ended (" + r->outcome + ")";
+        ended.x.push_back(r->samples.back().x_m);
+        ended.y.push_back(r->samples.back().y_m);
+      }
       s.push_back(rs);
     }
     s.push_back(blind);
-    report::PlotSpec spec{e.world_name + ": taught and replayed paths (" + e.features + ")",
-                          "x (m)", "y (m)", 1000, 800, true};
-    save(report::render_plot(spec, s), "top_view.png");
+    if (!ended.x.empty()) s.push_back(ended);
+    return report::render_plot({title, "x (m)", "y (m)", width_px, height_px, true}, s);
+  };
+  {
+    std::vector<const RunResult*> all;
+    for (const RunResult& r : e.runs) all.push_back(&r);
+    save(top_view(all, e.world_name + ": taught and replayed paths (" + e.features + ")", 1000, 800),
+         "top_view.png");
+    for (const RunResult& r : e.runs) {
+      const std::string n = std::to_string(r.index + 1);
+      save(top_view({&r}, "run " + n + (r.success ? ": " : ": FAILED, ") + r.outcome, 480, 400),
+           "run" + n + "_top_view.png");
+    }
   }
   auto over_distance = [&](const std::string& title, const std::string& ylabel, auto value,
                            const std::string& name) {

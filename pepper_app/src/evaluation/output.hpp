@@ -32,7 +32,9 @@ std::string runs_table(const Evaluation& evaluation);
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
 /// PNG plots of one evaluation into `dir` (created), file names prefixed with `prefix`
-/// (e.g. "robotics_room_lines+points_"). Returns the files written.
+/// (e.g. "robotics_room_lines+points_"): top_view.png (every run), run<N>_top_view.png (run N
+/// alone, N from 1; a failed run marked where it ended), lateral.png, omega.png, features.png.
+/// Returns the files written.
 std::vector<std::filesystem::path> write_plots(const Evaluation& evaluation,
                                                const TeachResult& teach, const sim::World& world,
                                                const std::filesystem::path& dir,

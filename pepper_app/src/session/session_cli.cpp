@@ -105,6 +105,19 @@ naoqi_bridge::CameraRequest camera_request(const AppConfig& config) {
   return r;
 }
 
+TeachFeedbackLimits teach_feedback_limits(const AppConfig& config, int min_key_features) {
+  TeachFeedbackLimits f;
+  f.min_view_features = min_key_features;
+  f.min_verified_matches = config.navigator.initial.rule.min_best_count;
+  // With the heading rule off (0) the count rule alone takes key images in turns; the warning
+  // keeps the default bound (a third of the view) as the turn key images can follow.
+  if (config.key_images.max_heading_change_rad > 0) {
+    f.max_heading_change_rad = config.key_images.max_heading_change_rad;
+  }
+  f.min_frame_gap = config.key_images.min_frame_gap;
+  return f;
+}
+
 namespace {
 
 /// Where the camera size was set explicitly (every such "--set", else the --config file), or ""

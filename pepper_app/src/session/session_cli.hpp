@@ -18,6 +18,7 @@
 #include "core/nav_mode.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
 #include "session/robot_connection.hpp"
+#include "session/teach_feedback.hpp"
 
 namespace pepper::teach_ui {
 class UiServer;
@@ -69,6 +70,11 @@ AppConfig load_session_config(const CommonSessionArgs& args);
 
 RobotConnectOptions robot_connect_options(const CommonSessionArgs& args, const AppConfig& config);
 naoqi_bridge::CameraRequest camera_request(const AppConfig& config);
+/// The teach's live warnings against this configuration: a view needs `min_key_features` lines
+/// + points (the weak-key-image bound), the replay min_best_count verified matches to recognise
+/// a key image, and the heading rule's bound and frame gap say how fast key images can follow a
+/// turn (docs/teach_ui.md "Teach feedback").
+TeachFeedbackLimits teach_feedback_limits(const AppConfig& config, int min_key_features);
 /// The head lock: robot.head_pitch_rad in forward mode, robot.ceiling_head_pitch_rad in ceiling
 /// mode (the yaw is robot.head_yaw_rad in both).
 naoqi_bridge::HeadLockRequest head_request(const AppConfig& config,

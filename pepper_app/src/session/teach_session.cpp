@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -35,6 +36,7 @@ std::vector<std::string> TeachSessionOptions::validate() const {
   if (!(max_omega_rad_s > 0 && max_omega_rad_s <= 2.0))
     e.push_back("max_omega_rad_s must be in (0, 2]");
   for (const auto& m : teach.validate()) e.push_back("teach: " + m);
+  for (const auto& m : feedback.validate()) e.push_back("feedback: " + m);
   return e;
 }
 
@@ -49,6 +51,47 @@ nlohmann::json teach_state(double map_distance_m, const nlohmann::json& keys, in
           {"n_lines", n_lines},
           {"n_points", n_points}};
 }
+
+/// |a - b| wrapped to [0, pi].
+double heading_difference_rad(double a, double b) {
+  return std::abs(std::remainder(a - b, 2.0 * M_PI));
+}
+
+/// The last few frames' headings, for the turn over the key-image gap (teach_feedback.hpp): the
+/// odometry's yaw when every frame in the window has one, else the commanded yaw rate
+/// integrated over the frame stamps.
+class TurnWindow {
+ public:
+  explicit TurnWindow(int frames) : frames_(frames) {}
+  void add(int64_t t_ns, std::optional<double> odom_yaw_rad, double commanded_omega_rad_s) {
+    if (!samples_.empty()) {
+      commanded_rad_ += commanded_omega_rad_s * (t_ns - samples_.back().t_ns) * 1e-9;
+    }
+    samples_.push_back({t_ns, odom_yaw_rad, commanded_rad_});
+    while (static_cast<int>(samples_.size()) > frames_ + 1) samples_.pop_front();
+  }
+  void reset() { samples_.clear(); commanded_rad_ = 0.0; }
+  /// |heading turned| over the last `frames` frames; nullopt until that many were seen.
+  std::optional<double> turned_rad() const {
+    if (static_cast<int>(samples_.size()) < frames_ + 1) return std::nullopt;
+    const Sample& a = samples_.front();
+    const Sample& b = samples_.back();
+    bool odom = true;
+    for (const auto& s : samples_) odom = odom && s.odom_yaw_rad.has_value();
+    if (odom) return heading_difference_rad(*b.odom_yaw_rad, *a.odom_yaw_rad);
+    return std::abs(b.commanded_rad - a.commanded_rad);
+  }
+
+ private:
+  struct Sample {
+    int64_t t_ns;
+    std::optional<double> odom_yaw_rad;
+    double commanded_rad;
+  };
+  int frames_;
+  std::deque<Sample> samples_;
+  double commanded_rad_ = 0.0;
+};
 
 }  // namespace
 
@@ -67,6 +110,30 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
   TeachResult result;
   std::optional<RecordingWriter> writer;
   std::optional<core::mapping::Teacher> teacher;
+  TeachFeedbackLimits feedback_limits;
+  TeachFeedback feedback;
+  nlohmann::json feedback_sent = to_json(feedback);
+  std::vector<std::string> feedback_kinds_sent;  // kinds in the last teach_feedback event
+  TurnWindow turn_window(options.feedback.min_frame_gap);
+  std::optional<int> key_features;  // lines + points of the current key image when taken
+  int previous_frame_features = 0;
+  // The live warnings go to the page whenever their text changes (it carries the live counts),
+  // and to the events file when a warning comes or goes (never the console: issue 25 keeps it
+  // quiet); the frames per kind go into the result.
+  auto publish_feedback = [&](const TeachFeedback& f) {
+    nlohmann::json j = to_json(f);
+    if (j == feedback_sent) return;
+    link.publish_state({{"teach_feedback", j}});
+    std::vector<std::string> kinds;
+    for (const auto& w : f.warnings) kinds.emplace_back(to_string(w.kind));
+    if (kinds != feedback_kinds_sent) {
+      nlohmann::json ev = {{"event", "teach_feedback"}};
+      ev.update(j);
+      link.event(ev);
+      feedback_kinds_sent = std::move(kinds);
+    }
+    feedback_sent = std::move(j);
+  };
   nlohmann::json key_list = nlohmann::json::array();
   bool recording = options.record_from_start;
   auto stop_base = [&](const std::string& why) {
@@ -106,6 +173,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json);
     }
     teacher.emplace(camera, options.teach);
+    feedback_limits = options.feedback;
+    feedback_limits.half_view_rad = std::atan(0.5 * camera.width_px / camera.fx_px);
     link.event({{"event", "teach_started"},
                 {"recording", options.recording_dir.string()},
                 {"camera", {{"width_px", camera.width_px}, {"height_px", camera.height_px}}}});
@@ -156,6 +225,9 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           case K::kStopRecording:
             recording = false;
             link.publish_state({{"recording", false}});
+            feedback = {};
+            turn_window.reset();
+            publish_feedback(feedback);
             break;
           case K::kFinishTeach:
             finish = true;
@@ -243,11 +315,31 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           key_list.push_back(std::move(key));
           link.publish_thumbnail("key/" + std::to_string(k), frame->gray);
         }
+        const auto& f = teacher->last_frame_features();
+        turn_window.add(frame->t_ns,
+                        frame->odom ? std::optional<double>(frame->odom->yaw_rad) : std::nullopt,
+                        sent.omega_rad_s);
+        TeachView view;
+        view.n_lines = static_cast<int>(f.lines.size());
+        view.n_points = static_cast<int>(f.corners_px.size());
+        // The key image's own richness: the frame the selector took (this one or the previous).
+        const int features_now = view.n_lines + view.n_points;
+        if (step.frame_number == 0 || step.new_key_frame == step.frame_number) {
+          key_features = features_now;
+        } else if (step.new_key_frame) {
+          key_features = previous_frame_features;
+        }
+        previous_frame_features = features_now;
+        view.key_features = key_features;
+        if (step.frame_number > 0) view.verified_with_key = step.count;
+        view.turned_over_gap_rad = turn_window.turned_rad();
+        view.heading_since_key_rad = step.heading_change_rad;
+        feedback = teach_feedback(view, feedback_limits, feedback);
+        for (const auto& w : feedback.warnings) ++result.feedback_frames[static_cast<int>(w.kind)];
+        publish_feedback(feedback);
         if (link.has_ui()) {
-          const auto& f = teacher->last_frame_features();
-          link.publish_state({{"teach", teach_state(travelled_m, key_list,
-                                                    static_cast<int>(f.lines.size()),
-                                                    static_cast<int>(f.corners_px.size()))}});
+          link.publish_state({{"teach", teach_state(travelled_m, key_list, view.n_lines,
+                                                    view.n_points)}});
         }
         link.publish_samples({{"t_s", (frame->t_ns - t0_ns) * 1e-9},
                               {"distance_m", result.distance_m},
@@ -325,6 +417,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
   }
 
   link.end_progress();
+  publish_feedback(TeachFeedback{});  // the session is over: nothing is live to warn about
   result.distance_from_odometry_m = odometer.from_odometry_m();
   if (frames_with_odometry == 0 && frames_without_odometry > 0) {
     result.warnings.push_back("the robot gave no odometry" +
@@ -433,7 +526,12 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
               {"error", result.error},
               {"frames", result.frames_recorded},
               {"key_images", result.key_images},
-              {"map_saved", result.map_saved}});
+              {"map_saved", result.map_saved},
+              // Recorded frames on which each live warning was shown (teach_feedback.hpp).
+              {"warning_frames",
+               {{to_string(TeachWarningKind::kFewFeatures), result.feedback_frames[0]},
+                {to_string(TeachWarningKind::kTurningFast), result.feedback_frames[1]},
+                {to_string(TeachWarningKind::kOverlapLost), result.feedback_frames[2]}}}});
   return result;
 }
 

@@ -8,7 +8,8 @@
 // is then saved atomically (core::memory::save_map) and summarised, with a warning for each key
 // image with few features (lines + points < min_key_features). On the mock robot the ground-truth
 // path goes next to it (taught_path.hpp). The UI's live image carries the frame's detected lines
-// and corners while recording.
+// and corners while recording, and live warnings (teach_feedback.hpp) when the view is too poor
+// or the turn too fast for the replay.
 //
 // Safety: every way out (finish, Ctrl-C flag, exception, lost connection, stalled frames) sends
 // bridge.stop() FIRST; then the recording is kept (it can become a map with `map build`); then
@@ -28,6 +29,7 @@
 #include "naoqi_bridge/robot_bridge.hpp"
 #include "session/robot_connection.hpp"
 #include "session/session_link.hpp"
+#include "session/teach_feedback.hpp"
 
 namespace pepper::app {
 
@@ -48,6 +50,9 @@ struct TeachSessionOptions {
   bool record_from_start = true;        ///< else wait for the UI's start_recording
   double pace_hz = 0.0;                 ///< > 0: at most this many loop iterations per second
   int min_key_features = 40;            ///< key images with fewer lines + points are "weak"
+  /// Live warnings while recording (teach_feedback.hpp), sent to the UI as `teach_feedback` and
+  /// to the events file; half_view_rad is replaced by the started camera's.
+  TeachFeedbackLimits feedback;
   double max_v_m_s = 0.25;              ///< clamp for UI drive intents
   double max_omega_rad_s = 0.5;
   std::vector<std::string> validate() const;
@@ -69,6 +74,8 @@ struct TeachResult {
   /// speeds, for frames without odometry).
   double distance_from_odometry_m = 0.0;
   int heading_key_images = 0;  ///< key images taken by the heading rule (turns)
+  /// Recorded frames on which each live warning was shown (index: TeachWarningKind).
+  int64_t feedback_frames[3] = {0, 0, 0};
   std::vector<std::string> warnings;
   std::vector<Eigen::Vector2d> path_m;  ///< mock only: ground-truth base positions per frame
   std::vector<Eigen::Vector2d> key_m;   ///< mock only: base positions of the key images

@@ -7,8 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+
+#include <opencv2/imgcodecs.hpp>
 #include <memory>
 
 #include "evaluation/disturbance.hpp"
@@ -284,6 +287,53 @@ TEST(Output, JsonHasSummaryAndRuns) {
   EXPECT_EQ(j["runs"].size(), 2u);
   EXPECT_EQ(j["evaluations"][0]["world"], "w");
   EXPECT_NE(summary_table({e}).find("1/2"), std::string::npos);
+}
+
+// `evaluate --plots` writes one small top view per run beside the combined one (the matrix index,
+// bench/closed_loop/combine.py --html, shows them): run N alone, a failed run marked pure red
+// (BGR 0,0,255, a colour no other series uses) where it ended.
+TEST(Output, PlotsHaveATopViewPerRunWithTheFailureMarked) {
+  const test::TempDir tmp("plots");
+  Evaluation e;
+  e.world_name = "small_room";
+  e.features = "lines+points";
+  TeachResult teach;
+  for (int i = 0; i <= 20; ++i) teach.path_m.emplace_back(1.0 + 0.1 * i, 1.0);
+  RunResult ok, failed;
+  failed.index = 1;
+  failed.success = false;
+  failed.outcome = "lost";
+  for (int i = 0; i <= 20; ++i) {
+    RunSample smp;
+    smp.x_m = 1.0 + 0.1 * i;
+    smp.y_m = 1.05;
+    ok.samples.push_back(smp);
+    if (i <= 8) failed.samples.push_back(smp);
+  }
+  ok.success = true;
+  ok.outcome = "complete";
+  e.runs = {ok, failed};
+  const auto files = write_plots(e, teach, *small_room(), tmp.path(), "p_");
+  auto red_pixels = [](const cv::Mat& img) {
+    int n = 0;
+    for (int r = 0; r < img.rows; ++r) {
+      for (int c = 0; c < img.cols; ++c) {
+        const auto& px = img.at<cv::Vec3b>(r, c);
+        n += px[0] == 0 && px[1] == 0 && px[2] == 255;
+      }
+    }
+    return n;
+  };
+  const cv::Mat run1 = cv::imread((tmp.path() / "p_run1_top_view.png").string(), cv::IMREAD_COLOR);
+  const cv::Mat run2 = cv::imread((tmp.path() / "p_run2_top_view.png").string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(run1.empty());
+  ASSERT_FALSE(run2.empty());
+  EXPECT_EQ(run1.cols, 480);
+  EXPECT_EQ(run1.rows, 400);
+  EXPECT_EQ(red_pixels(run1), 0) << "a run that succeeded has no end-of-failure mark";
+  EXPECT_GT(red_pixels(run2), 10) << "the failed run is marked where it ended";
+  EXPECT_TRUE(std::filesystem::exists(tmp.path() / "p_top_view.png"));
+  EXPECT_EQ(std::count(files.begin(), files.end(), tmp.path() / "p_run2_top_view.png"), 1);
 }
 
 }  // namespace
