@@ -621,15 +621,35 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   // to itself, until every fix of it was within the gate (room_corridor_room, furniture, run 4).
   const double fix_weight =
       fix && prior ? std::pow(std::max(0.0, 1.0 - fix->prior_d2 / prior->gate_chi2), 2) : 1.0;
+  const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
+  const bool arc = vnhv_curvature_1_m_ != 0.0;
+  auto deviation_of = [&](const control::PlanarPose& pose) {
+    auto dev = arc ? control::deviation_from_arc(prev, pose)
+                   : control::deviation_from_segment(prev, pose);
+    if (dev) dev->lateral_m *= vnhv_m_per_unit_;  // segment units -> m
+    return dev;
+  };
+  if (prior) {
+    tel.vnhv_fix_d2 = fix ? fix->prior_d2 : kNaN;
+    tel.vnhv_fix_weight = fix ? fix_weight : kNaN;
+    if (const auto dev = deviation_of(prior->pose)) {
+      tel.odom_lateral_m = dev->lateral_m;
+      tel.odom_heading_rad = dev->heading_rad;
+    }
+    tel.odom_lateral_sigma_m = lateral_sigma_m_;
+    tel.odom_heading_sigma_rad = heading_sigma_rad_;
+  }
+  if (fix && !fix->within_prior) {
+    if (const auto dev = deviation_of(fix->pose)) {
+      tel.vnhv_fix_lateral_m = dev->lateral_m;
+      tel.vnhv_fix_heading_rad = dev->heading_rad;
+    }
+  }
   if (fix && fix->within_prior && fix_weight > 0.0) {
-    const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
-    const bool arc = vnhv_curvature_1_m_ != 0.0;
     // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
     past_next = arc ? fix->pose.x_m > 0.0
                     : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
-    if (auto dev = arc ? control::deviation_from_arc(prev, fix->pose)
-                       : control::deviation_from_segment(prev, fix->pose)) {
-      dev->lateral_m *= vnhv_m_per_unit_;  // segment units -> m
+    if (auto dev = deviation_of(fix->pose)) {
       tel.vnhv_fix_lateral_m = dev->lateral_m;
       tel.vnhv_fix_heading_rad = dev->heading_rad;
       vnhv_filter_.correct(*dev, tel.t_ns, fix_weight);

@@ -107,6 +107,37 @@ TEST(DeadReckoning, DrivesABlindTurnAndHandsBackToVision) {
   EXPECT_LT(worst_off_m, 0.15);
 }
 
+TEST(DeadReckoning, TelemetryShowsThePredictionTheFixesAreWeighedAgainst) {
+  // With odometry, each VNHV frame reports the odometry estimate's deviation from the segment
+  // (the prediction a fix is gated against), its sigmas, and the fix's distance and weight.
+  const ClosedLoopRun run = closed_loop(NavigatorOptions{}, [](double) { return false; });
+  int predicted = 0, weighed = 0;
+  for (size_t i = 0; i < run.steps.size(); ++i) {
+    const Telemetry& t = run.steps[i].telemetry;
+    if (!std::isfinite(t.odom_lateral_m)) continue;
+    ++predicted;
+    EXPECT_TRUE(std::isfinite(t.odom_heading_rad));
+    EXPECT_GT(t.odom_lateral_sigma_m, 0.0);
+    EXPECT_GT(t.odom_heading_sigma_rad, 0.0);
+    // The estimate, corrected by the fixes, is where the robot is: its distance from the path
+    // within a few centimetres of the truth's (the odometry itself drifts 2 % and 4 %).
+    EXPECT_NEAR(std::abs(t.odom_lateral_m), off_path_m(run.truth[i]), 0.05) << "frame " << i;
+    if (std::isfinite(t.vnhv_fix_weight)) {
+      ++weighed;
+      EXPECT_GE(t.vnhv_fix_d2, 0.0);
+      EXPECT_GE(t.vnhv_fix_weight, 0.0);
+      EXPECT_LE(t.vnhv_fix_weight, 1.0);
+      // A refused fix still shows what it measured; an accepted one has a positive weight.
+      EXPECT_TRUE(std::isfinite(t.vnhv_fix_lateral_m));
+      if (!t.vnhv_fix_refused) {
+        EXPECT_GT(t.vnhv_fix_weight, 0.0);
+      }
+    }
+  }
+  EXPECT_GT(predicted, 30);
+  EXPECT_GT(weighed, 30);
+}
+
 TEST(DeadReckoning, StopsAndSaysSoWhenVisionNeverComesBack) {
   NavigatorOptions o;
   o.dead_reckoning_max_m = 0.6;

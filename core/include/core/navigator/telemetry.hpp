@@ -91,8 +91,16 @@ struct Telemetry {
   /// (vnhv_fix_refused: every structure in view has moved as far as the odometry can tell).
   int vnhv_structures = 0;
   bool vnhv_fix_refused = false;
-  /// This frame's own VNHV measurement (before the deviation filter), NaN without an accepted fix.
+  /// This frame's own VNHV measurement (before the deviation filter), NaN without a fix; with
+  /// vnhv_fix_refused, the largest structure's, which was not used.
   double vnhv_fix_lateral_m = kNaN, vnhv_fix_heading_rad = kNaN;
+  /// The fix's squared Mahalanobis distance to the odometry's prediction (control::PosePrior) and
+  /// its weight (1 at the prediction, 0 at the gate); NaN without a prediction.
+  double vnhv_fix_d2 = kNaN, vnhv_fix_weight = kNaN;
+  /// The odometry estimate's deviation from the current segment (the prediction the fixes are
+  /// gated against) and its sigmas across and in heading; NaN without an odometry estimate.
+  double odom_lateral_m = kNaN, odom_heading_rad = kNaN;
+  double odom_lateral_sigma_m = kNaN, odom_heading_sigma_rad = kNaN;
   double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
   /// Part of omega_demand_rad_s fed forward from the segment's taught turn (turn_feedforward),
   /// rad/s; NaN when none was added.
