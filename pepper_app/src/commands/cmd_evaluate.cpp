@@ -14,6 +14,7 @@
 #include "config/app_config.hpp"
 #include "evaluation/closed_loop.hpp"
 #include "evaluation/output.hpp"
+#include "report/map_page.hpp"
 #include "session/session_cli.hpp"
 #include "sim/world.hpp"
 
@@ -134,6 +135,7 @@ int run_evaluate(const EvaluateArgs& a) {
 
   std::vector<ev::Evaluation> results;
   std::vector<std::filesystem::path> plots;
+  std::vector<ev::KeyImageStrip> strips;
   for (const std::string& world_file : a.worlds) {
     auto world = std::make_shared<const sim::World>(sim::load_world(world_file));
     ev::EvaluationOptions to = o;
@@ -148,6 +150,10 @@ int run_evaluate(const EvaluateArgs& a) {
       mo.features = mode;
       if (!mo.map_dir.empty()) mo.map_dir += ev::single_modality_tag(mode, "_");
       const ev::TeachResult teach = ev::teach_tour(world, mo, progress);
+      if (!a.plots_dir.empty()) {
+        strips.push_back({world->name + " (" + core::control::to_string(mode) + ")",
+                          report::key_image_thumbnails(teach.map, {})});
+      }
       for (const auto& config : configs) {
         ev::EvaluationOptions ro = mo;
         ro.disturbances = config;
@@ -168,7 +174,7 @@ int run_evaluate(const EvaluateArgs& a) {
   std::cout << ev::summary_table(results);
   if (!a.json_out.empty()) ev::write_text_file(a.json_out, ev::to_json(results).dump(2) + "\n");
   if (!a.plots_dir.empty()) {
-    ev::write_html_report(results, plots, a.command_line,
+    ev::write_html_report(results, plots, strips, a.command_line,
                           std::filesystem::path(a.plots_dir) / "report.html");
   }
   int failures = 0;

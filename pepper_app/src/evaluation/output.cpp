@@ -196,7 +196,7 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
   // small one per run (`run<N>_top_view.png`) for the matrix index (combine.py --html), where a
   // failed run is seen on its own with a red mark where it ended.
   auto top_view = [&](const std::vector<const RunResult*>& runs, const std::string& title,
-                      int width_px, int height_px) {
+                      int width_px, int height_px, bool numbered) {
     std::vector<report::Series> s;
     for (size_t i = 0; i < world.walls.size(); ++i) {
       const auto& w = world.walls[i];
@@ -217,6 +217,18 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
       taught.y.push_back(p.y());
     }
     s.push_back(taught);
+    // The key images where they were taught, numbered on the large view (every one, or every
+    // 5th / 10th / ... on a long tour, so that the numbers stay legible), unnumbered on a run's
+    // own small view; the report's key-image strip has the same numbers.
+    report::Series keys{"key images", {}, {}, report::palette(4), 1, true};
+    const std::size_t n_keys = teach.key_m.size();
+    const std::size_t stride = n_keys <= 20 ? 1 : 5 * ((n_keys + 99) / 100);
+    for (std::size_t k = 0; k < n_keys; ++k) {
+      keys.x.push_back(teach.key_m[k].x());
+      keys.y.push_back(teach.key_m[k].y());
+      if (numbered) keys.point_labels.push_back(k % stride == 0 ? std::to_string(k) : "");
+    }
+    s.push_back(keys);
     // Where each run drove on odometry alone (vision blind, issue 29), as markers over the paths.
     report::Series blind{"driven on odometry alone", {}, {}, cv::Scalar(0, 0, 220), 1, true};
     report::Series ended{"", {}, {}, cv::Scalar(0, 0, 255), 4, true};
@@ -245,11 +257,11 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
   {
     std::vector<const RunResult*> all;
     for (const RunResult& r : e.runs) all.push_back(&r);
-    save(top_view(all, e.world_name + ": taught and replayed paths (" + e.features + ")", 1000, 800),
+    save(top_view(all, e.world_name + ": taught and replayed paths (" + e.features + ")", 1000, 800, true),
          "top_view.png");
     for (const RunResult& r : e.runs) {
       const std::string n = std::to_string(r.index + 1);
-      save(top_view({&r}, "run " + n + (r.success ? ": " : ": FAILED, ") + r.outcome, 480, 400),
+      save(top_view({&r}, "run " + n + (r.success ? ": " : ": FAILED, ") + r.outcome, 480, 400, false),
            "run" + n + "_top_view.png");
     }
   }
@@ -292,6 +304,7 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& e, const TeachR
 
 void write_html_report(const std::vector<Evaluation>& evaluations,
                        const std::vector<std::filesystem::path>& plots,
+                       const std::vector<KeyImageStrip>& key_images,
                        const std::string& command_line, const std::filesystem::path& path) {
   report::HtmlReport page("Closed-loop evaluation");
   page.heading("Closed-loop evaluation");
@@ -307,6 +320,10 @@ void write_html_report(const std::vector<Evaluation>& evaluations,
   for (const auto& p : plots) {
     const cv::Mat img = cv::imread(p.string(), cv::IMREAD_COLOR);
     if (!img.empty()) page.image(img, p.filename().string());
+  }
+  for (const KeyImageStrip& k : key_images) {
+    page.heading("Key images: " + k.title + " (numbered as on the top view)");
+    page.raw_html(k.html);
   }
   page.write(path);
 }

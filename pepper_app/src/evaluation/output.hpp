@@ -40,9 +40,17 @@ std::vector<std::filesystem::path> write_plots(const Evaluation& evaluation,
                                                const std::filesystem::path& dir,
                                                const std::string& prefix);
 
-/// An HTML page with the summary table, the per-run tables and every plot of `dir`'s PNGs.
+/// The key images of one taught map for the report (report::key_image_thumbnails).
+struct KeyImageStrip {
+  std::string title;  ///< e.g. "robotics_room (lines+points)"
+  std::string html;
+};
+
+/// An HTML page with the summary table, the per-run tables, every plot of `dir`'s PNGs and the
+/// key images of each taught map.
 void write_html_report(const std::vector<Evaluation>& evaluations,
                        const std::vector<std::filesystem::path>& plots,
+                       const std::vector<KeyImageStrip>& key_images,
                        const std::string& command_line, const std::filesystem::path& path);
 
 }  // namespace pepper::app::evaluation

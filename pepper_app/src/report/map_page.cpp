@@ -71,6 +71,30 @@ std::optional<cv::Mat> path_plot(const mem::VisualMemory& map,
 
 }  // namespace
 
+std::string key_image_thumbnails(const mem::VisualMemory& map, const std::set<int>& flagged) {
+  const mem::MapSummary summary = mem::summarize(map);
+  std::string grid =
+      "<style>.thumbs{display:flex;flex-wrap:wrap;gap:10px}.thumbs figure{margin:0;width:" +
+      std::to_string(kThumbWidthPx + 6) +
+      "px}.thumbs img{width:100%}.thumbs .weak img{border:3px solid #d22}"
+      ".thumbs .weak figcaption{color:#b00}.warnings li{color:#b00}</style>\n"
+      "<div class=\"thumbs\">\n";
+  for (std::size_t i = 0; i < map.key_images.size(); ++i) {
+    const auto& k = map.key_images[i];
+    const auto& s = summary.key_images[i];
+    std::string text = "#" + std::to_string(i) + ": " + std::to_string(s.lines) + " lines, " +
+                       std::to_string(s.corners) + " points";
+    if (std::isfinite(s.travelled_m)) text += ", at " + fixed(s.travelled_m, 2) + " m";
+    const bool weak = flagged.count(static_cast<int>(i)) > 0;
+    // Appended piece by piece: one long concatenation trips GCC 12's -Wrestrict (a false alarm).
+    grid += weak ? "<figure class=\"key weak\"" : "<figure class=\"key\"";
+    grid += " id=\"key-" + std::to_string(i) + "\"><img alt=\"key image " + std::to_string(i);
+    grid += "\" src=\"" + jpeg_data_uri(k.features.gray) + "\"><figcaption>";
+    grid += html_escape(text) + "</figcaption></figure>\n";
+  }
+  return grid + "</div>\n";
+}
+
 HtmlReport map_page(const std::string& name, const mem::VisualMemory& map,
                     const std::vector<TourWarning>& warnings,
                     const std::optional<TaughtPath>& taught_path) {
@@ -113,26 +137,7 @@ HtmlReport map_page(const std::string& name, const mem::VisualMemory& map,
   page.heading("Key images");
   std::set<int> flagged;
   for (const auto& w : warnings) flagged.insert(w.key_index);
-  std::string grid =
-      "<style>.thumbs{display:flex;flex-wrap:wrap;gap:10px}.thumbs figure{margin:0;width:" +
-      std::to_string(kThumbWidthPx + 6) +
-      "px}.thumbs img{width:100%}.thumbs .weak img{border:3px solid #d22}"
-      ".thumbs .weak figcaption{color:#b00}.warnings li{color:#b00}</style>\n"
-      "<div class=\"thumbs\">\n";
-  for (std::size_t i = 0; i < map.key_images.size(); ++i) {
-    const auto& k = map.key_images[i];
-    const auto& s = summary.key_images[i];
-    std::string text = "#" + std::to_string(i) + ": " + std::to_string(s.lines) + " lines, " +
-                       std::to_string(s.corners) + " points";
-    if (std::isfinite(s.travelled_m)) text += ", at " + fixed(s.travelled_m, 2) + " m";
-    const bool weak = flagged.count(static_cast<int>(i)) > 0;
-    // Appended piece by piece: one long concatenation trips GCC 12's -Wrestrict (a false alarm).
-    grid += weak ? "<figure class=\"key weak\"" : "<figure class=\"key\"";
-    grid += " id=\"key-" + std::to_string(i) + "\"><img alt=\"key image " + std::to_string(i);
-    grid += "\" src=\"" + jpeg_data_uri(k.features.gray) + "\"><figcaption>";
-    grid += html_escape(text) + "</figcaption></figure>\n";
-  }
-  page.raw_html(grid + "</div>\n");
+  page.raw_html(key_image_thumbnails(map, flagged));
   return page;
 }
 

@@ -5,6 +5,7 @@
 // key image as a thumbnail with its line and point counts; weak ones are framed in red.
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,12 @@
 #include "session/taught_path.hpp"
 
 namespace pepper::app::report {
+
+/// Every key image of `map` (loaded with its images) as a numbered thumbnail with its line and
+/// point counts, in tour order; those in `flagged` framed in red. HTML with its own style, for
+/// `map show` and the evaluation report.
+std::string key_image_thumbnails(const core::memory::VisualMemory& map,
+                                 const std::set<int>& flagged);
 
 /// The page for `map` (loaded with its images), titled after `name`.
 HtmlReport map_page(const std::string& name, const core::memory::VisualMemory& map,

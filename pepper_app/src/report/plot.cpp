@@ -117,6 +117,11 @@ cv::Mat render_plot(const PlotSpec& spec, const std::vector<Series>& series) {
     } else if (pts.size() > 1) {
       cv::polylines(img, pts, false, s.bgr, s.thickness_px, cv::LINE_AA);
     }
+    for (std::size_t i = 0; i < std::min({s.x.size(), s.y.size(), s.point_labels.size()}); ++i) {
+      if (s.point_labels[i].empty() || !std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      const cv::Point p = to_px(s.x[i], s.y[i]);
+      cv::putText(img, s.point_labels[i], {p.x + 5, p.y - 5}, font, 0.38, s.bgr, 1, cv::LINE_AA);
+    }
     if (!s.label.empty()) {
       const int lx = area.x + area.width - 190;
       cv::line(img, {lx, legend_y - 4}, {lx + 24, legend_y - 4}, s.bgr, 3, cv::LINE_AA);

@@ -16,6 +16,9 @@ struct Series {
   cv::Scalar bgr{200, 80, 30};
   int thickness_px = 2;
   bool markers = false;  ///< draw a small circle at every sample instead of joining them
+  /// Text drawn beside sample i (an empty string, or an index past the end: none), e.g. the
+  /// numbers of the key images on a top view.
+  std::vector<std::string> point_labels{};
 };
 
 struct PlotSpec {

@@ -191,7 +191,8 @@ TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
       std::string(PEPPER_SOURCE_DIR) + "/tests/app/evaluation/data/small_room.yaml";
   test::AppProcess eval({"evaluate", "--world", world, "--starts", "2", "--run", "2", "--seed", "3", "--size",
               "320x240", "--map-dir", (dir / "maps").string(), "--trace",
-              (dir / "trace").string(), "--json", (dir / "eval.json").string(), "--quiet"},
+              (dir / "trace").string(), "--json", (dir / "eval.json").string(), "--quiet",
+              "--plots", (dir / "plots").string()},
              dir, "evaluate");
   const int eval_rc = eval.wait(std::chrono::seconds(300));
   ASSERT_TRUE(eval_rc == 0 || eval_rc == 1) << eval.both();
@@ -199,6 +200,19 @@ TEST(AppE2E, EvaluateAndReplayDriveTheSameRun) {
   const auto results = nlohmann::json::parse(eval_json);
   ASSERT_EQ(results["evaluations"][0]["runs"].size(), 1u) << results.dump();
   const auto& run = results["evaluations"][0]["runs"][0];
+  {
+    // The report shows the taught map's key images, numbered as on the top view (issue 25).
+    std::ifstream in(dir / "plots" / "report.html");
+    const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto map = core::memory::load_map(dir / "maps" / "small_room_320x240");
+    ASSERT_GE(map.key_images.size(), 2u);
+    const std::string last = "id=\"key-" + std::to_string(map.key_images.size() - 1) + "\"";
+    EXPECT_NE(html.find("Key images: small_room"), std::string::npos);
+    EXPECT_NE(html.find(last), std::string::npos) << "the last key image's thumbnail";
+    EXPECT_EQ(html.find("id=\"key-" + std::to_string(map.key_images.size()) + "\""),
+              std::string::npos);
+    EXPECT_NE(html.find("data:image/jpeg;base64,"), std::string::npos);
+  }
 
   // Run 2 is start index 1.
   test::AppProcess replay(test::cat({"replay", "--robot", "mock:" + world, "--map",

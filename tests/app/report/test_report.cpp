@@ -1,3 +1,4 @@
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -43,6 +44,27 @@ TEST(Plot, DrawsSeriesInsideTheAxesAndSurvivesNaN) {
   cv::Mat mask;
   cv::inRange(img, palette(0) - cv::Scalar(10, 10, 10), palette(0) + cv::Scalar(10, 10, 10), mask);
   EXPECT_GT(cv::countNonZero(mask), 20);
+}
+
+// Labels (the key images' numbers on a top view) are drawn beside their own samples only.
+TEST(Plot, PointLabelsAreDrawnBesideTheirSamples) {
+  Series plain{"keys", {1.0, 5.0, 9.0}, {1.0, 5.0, 9.0}, palette(4), 1, true};
+  Series labelled = plain;
+  labelled.point_labels = {"10", "", "30"};
+  const PlotSpec spec{"t", "x", "y", 400, 400, true};
+  const cv::Mat a = render_plot(spec, {plain}), b = render_plot(spec, {labelled});
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  cv::cvtColor(diff, diff, cv::COLOR_BGR2GRAY);
+  std::vector<cv::Point> changed;
+  cv::findNonZero(diff, changed);
+  ASSERT_GT(changed.size(), 10u) << "the labels were drawn";
+  // Every changed pixel is up and to the right of the first or the third sample, none near the
+  // unlabelled middle one (the middle of the plot).
+  const cv::Point mid(a.cols / 2, a.rows / 2);
+  for (const cv::Point& p : changed) {
+    EXPECT_GT(std::hypot(p.x - mid.x, p.y - mid.y), 40.0) << p;
+  }
 }
 
 TEST(HtmlReport, EscapesTextAndEmbedsImages) {
