@@ -15,11 +15,14 @@
 # Usage: bench/closed_loop/matrix.sh [--out DIR] [--app BIN] [--size WxH] [--starts N]
 #                                    [--gen-starts N] [--gen-seeds N]
 #                                    [--jobs N] [--shard I/N] [--only REGEX] [--list]
+#                                    [--set KEY=VALUE]...
 #   --gen-starts N  starts per generated world (5); --gen-seeds N: seeds 1..N (20; 0: none)
 #   --shard I/N   run only configurations I, I+N, I+2N, ... (1-based) of the list
 #   --only REGEX  run only configurations whose name matches (e.g. 'robotics_room', 'light',
 #                 '^gen_' for the generated worlds only)
 #   --list        print the configuration names and exit
+#   --set K=V     passed to every `pepper_app evaluate` (repeatable): an ablation runs the matrix
+#                 with one navigator rule off, e.g. --set navigator.arrival_fade_ratio=0
 # Example (two sessions, each half of the matrix, then one table):
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 1/2
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 2/2
@@ -38,6 +41,7 @@ JOBS=2
 SHARD=1/1
 ONLY=.
 LIST=0
+SETS=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --out) OUT=$2; shift 2 ;;
@@ -50,7 +54,8 @@ while [[ $# -gt 0 ]]; do
     --shard) SHARD=$2; shift 2 ;;
     --only) ONLY=$2; shift 2 ;;
     --list) LIST=1; shift ;;
-    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
+    --set) SETS+=(--set "$2"); shift 2 ;;
+    -h|--help) sed -n '2,31p' "$0"; exit 0 ;;
     *) echo "matrix.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -105,12 +110,15 @@ run_one() {
   if [[ -s $OUT/$name.json ]]; then echo "skip $name (done)"; return 0; fi
   echo "$(date +%T) start $name"
   # shellcheck disable=SC2086
-  "$APP" evaluate $args --seed 1 --size "$SIZE" --json "$OUT/$name.json.tmp" \
+  "$APP" evaluate $args $EVAL_SETS --seed 1 --size "$SIZE" --json "$OUT/$name.json.tmp" \
       --plots "$OUT/$name" > "$OUT/$name.txt" 2> "$OUT/$name.log" || true
   if [[ -s $OUT/$name.json.tmp ]]; then mv "$OUT/$name.json.tmp" "$OUT/$name.json"; fi
   echo "$(date +%T) done  $name"
 }
 export -f run_one
-export OUT APP SIZE
+# Settings as one word-split string (keys and values have no spaces): xargs's children cannot
+# inherit a bash array.
+EVAL_SETS="${SETS[*]}"
+export OUT APP SIZE EVAL_SETS
 printf '%s\n' "${SELECTED[@]}" | xargs -d '\n' -P "$JOBS" -I{} bash -c 'run_one "$@"' _ {}
 echo "tables: bench/closed_loop/combine.py $OUT/*.json --html $OUT/index.html"
