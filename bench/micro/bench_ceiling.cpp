@@ -25,7 +25,7 @@ namespace ceiling = pepper::core::ceiling;
 namespace sim = pepper::sim;
 
 constexpr double kPitchRad = -0.7;
-constexpr double kPxPerM = 120.0;  // as tests/core/ceiling/test_mosaic_sim.cpp
+constexpr double kPxPerM = 120.0;  // as tests/sim/test_ceiling_mosaic.cpp
 
 struct Fixture {
   std::unique_ptr<ceiling::CanonicalView> view;

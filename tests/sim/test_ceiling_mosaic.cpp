@@ -6,7 +6,7 @@
 // frame of the first frame, so T_world_mosaic is the first true base pose.
 //
 // The tolerances below are stated in docs/method/ceiling.md with the measured figures (printed
-// by these tests: `build/tests/core_tests --gtest_filter='CeilingMosaicSim*'`).
+// by these tests: `build/tests/sim_tests --gtest_filter='CeilingMosaicSim*'`).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -151,7 +151,7 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // Figures for docs/method/ceiling.md, written only when PEPPER_CEILING_FIGURES names a folder:
-//   PEPPER_CEILING_FIGURES=docs/img build/tests/core_tests --gtest_filter='CeilingMosaicSim*'
+//   PEPPER_CEILING_FIGURES=docs/img build/tests/sim_tests --gtest_filter='CeilingMosaicSim*'
 std::optional<std::filesystem::path> figure_dir() {
   const char* dir = std::getenv("PEPPER_CEILING_FIGURES");
   if (!dir || !*dir) return std::nullopt;
