@@ -53,8 +53,8 @@ const Fixture& fixture() {
     camera.head_pitch_rad = kPitchRad;
     camera.ceiling_above_cam_m =
         world->ceiling_height_m - robot.ground_truth().T_world_cam.translation().z();
-    out->view = std::make_unique<ceiling::CanonicalView>(
-        camera, ceiling::fit_frame(camera, kPxPerM, 3.5));
+    out->view =
+        std::make_unique<ceiling::CanonicalView>(camera, ceiling::fit_frame(camera, kPxPerM, 3.5));
     const Eigen::Vector3d t = robot.options().mount.T_base_cam(0.0, kPitchRad).translation();
     out->cam_in_base_m = {t.x(), t.y()};
     ceiling::MosaicBuilderOptions options;

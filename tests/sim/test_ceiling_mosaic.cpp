@@ -68,8 +68,7 @@ Rig make_rig(const sim::MockRobot& robot) {
   CeilingCamera camera;
   camera.intrinsics = robot.intrinsics(kWidthPx, kHeightPx);
   camera.head_pitch_rad = kPitchRad;
-  camera.ceiling_above_cam_m =
-      robot.world().ceiling_height_m - truth.T_world_cam.translation().z();
+  camera.ceiling_above_cam_m = robot.world().ceiling_height_m - truth.T_world_cam.translation().z();
   Rig rig;
   rig.view = std::make_unique<CanonicalView>(camera, fit_frame(camera, kPxPerM, 3.5));
   const Eigen::Vector3d t = robot.options().mount.T_base_cam(0.0, kPitchRad).translation();
@@ -164,8 +163,8 @@ cv::Mat top_view(const Taught& t, const std::vector<size_t>& relay_frames) {
   const sim::World& w = t.robot->world();
   constexpr double kPx = 60.0;
   const cv::Point2d lo(w.min_m.x(), w.min_m.y()), hi(w.max_m.x(), w.max_m.y());
-  cv::Mat img(static_cast<int>((hi.y - lo.y) * kPx), static_cast<int>((hi.x - lo.x) * kPx),
-              CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::Mat img(static_cast<int>((hi.y - lo.y) * kPx), static_cast<int>((hi.x - lo.x) * kPx), CV_8UC3,
+              cv::Scalar(255, 255, 255));
   auto px = [&](const cv::Point2d& p) {
     return cv::Point(static_cast<int>(std::lround((p.x - lo.x) * kPx)),
                      static_cast<int>(std::lround((hi.y - p.y) * kPx)));
@@ -175,9 +174,9 @@ cv::Mat top_view(const Taught& t, const std::vector<size_t>& relay_frames) {
     if (!horizontal || q.origin_m.z() < 2.3 || q.size_u_m * q.size_v_m > 20.0) continue;
     const Eigen::Vector3d u = q.size_u_m * q.axis_u, v = q.size_v_m * q.axis_v;
     std::vector<cv::Point> poly;
-    for (const Eigen::Vector3d& c : {Eigen::Vector3d(q.origin_m), Eigen::Vector3d(q.origin_m + u),
-                                     Eigen::Vector3d(q.origin_m + u + v),
-                                     Eigen::Vector3d(q.origin_m + v)})
+    for (const Eigen::Vector3d& c :
+         {Eigen::Vector3d(q.origin_m), Eigen::Vector3d(q.origin_m + u),
+          Eigen::Vector3d(q.origin_m + u + v), Eigen::Vector3d(q.origin_m + v)})
       poly.push_back(px({c.x(), c.y()}));
     const bool lamp = q.light == sim::LightGroup::kLamps;
     cv::fillConvexPoly(img, poly, lamp ? cv::Scalar(120, 230, 250) : cv::Scalar(200, 200, 200));
@@ -231,10 +230,11 @@ TEST(CeilingMosaicSim, TheTourBuildsAMosaicWhoseLandmarksSitWhereTheCeilingIs) {
     errors.push_back(cv::norm(world_of_mosaic(t, l.position_m) - truth_of_id[l.id]));
   }
   const double median = percentile(errors, 0.5), p95 = percentile(errors, 0.95);
-  std::printf("[ mosaic ] %zu frames, %.2f m, %zu landmarks kept; landmark error vs truth: median "
-              "%.1f mm, p95 %.1f mm, max %.1f mm\n",
-              frames.size(), t.tour.length_m, t.mosaic.landmarks.size(), 1e3 * median, 1e3 * p95,
-              1e3 * percentile(errors, 1.0));
+  std::printf(
+      "[ mosaic ] %zu frames, %.2f m, %zu landmarks kept; landmark error vs truth: median "
+      "%.1f mm, p95 %.1f mm, max %.1f mm\n",
+      frames.size(), t.tour.length_m, t.mosaic.landmarks.size(), 1e3 * median, 1e3 * p95,
+      1e3 * percentile(errors, 1.0));
   EXPECT_LT(median, 0.05);
   EXPECT_LT(p95, 0.12);
 
@@ -252,9 +252,9 @@ TEST(CeilingMosaicSim, TheTourBuildsAMosaicWhoseLandmarksSitWhereTheCeilingIs) {
   for (const sim::Quad& q : t.robot->world().quads) {
     if (q.light != sim::LightGroup::kLamps) continue;
     const Eigen::Vector3d u = q.size_u_m * q.axis_u, v = q.size_v_m * q.axis_v;
-    for (const Eigen::Vector3d& c : {Eigen::Vector3d(q.origin_m), Eigen::Vector3d(q.origin_m + u),
-                                     Eigen::Vector3d(q.origin_m + v),
-                                     Eigen::Vector3d(q.origin_m + u + v)}) {
+    for (const Eigen::Vector3d& c :
+         {Eigen::Vector3d(q.origin_m), Eigen::Vector3d(q.origin_m + u),
+          Eigen::Vector3d(q.origin_m + v), Eigen::Vector3d(q.origin_m + u + v)}) {
       // Seen well: in the central part of the canonical view of at least 10 frames.
       int seen = 0;
       for (const sim::Pose2D& p : t.tour.truth) {
@@ -273,10 +273,11 @@ TEST(CeilingMosaicSim, TheTourBuildsAMosaicWhoseLandmarksSitWhereTheCeilingIs) {
   ASSERT_GE(corner_nearest.size(), 8u);
   const double corner_median = percentile(corner_nearest, 0.5);
   const double control_median = percentile(control_nearest, 0.5);
-  std::printf("[ mosaic ] lamp corners under the tour: %zu; nearest kept landmark: median %.1f mm, "
-              "max %.1f mm (control points: median %.1f mm)\n",
-              corner_nearest.size(), 1e3 * corner_median, 1e3 * percentile(corner_nearest, 1.0),
-              1e3 * control_median);
+  std::printf(
+      "[ mosaic ] lamp corners under the tour: %zu; nearest kept landmark: median %.1f mm, "
+      "max %.1f mm (control points: median %.1f mm)\n",
+      corner_nearest.size(), 1e3 * corner_median, 1e3 * percentile(corner_nearest, 1.0),
+      1e3 * control_median);
   EXPECT_LT(corner_median, 0.5 * control_median);
   EXPECT_LT(corner_median, 0.03);
 }
@@ -294,11 +295,12 @@ TEST(CeilingMosaicSim, TheChainedDriftOverTheTourIsBounded) {
   const PlanarPose end_truth = t.T_world_mosaic.inverse() * to_planar(t.tour.truth.back());
   const PlanarPose& end = frames.back().T_mosaic_base;
   const double end_pos = std::hypot(end.x_m - end_truth.x_m, end.y_m - end_truth.y_m);
-  std::printf("[ mosaic ] chained pose drift over %.2f m: end %.1f mm (%.2f %%), %.2f deg; max "
-              "%.1f mm, %.2f deg\n",
-              t.tour.length_m, 1e3 * end_pos, 100.0 * end_pos / t.tour.length_m,
-              std::abs(wrap_angle_rad(end.theta_rad - end_truth.theta_rad)) * 180 / M_PI,
-              1e3 * max_pos, max_yaw * 180 / M_PI);
+  std::printf(
+      "[ mosaic ] chained pose drift over %.2f m: end %.1f mm (%.2f %%), %.2f deg; max "
+      "%.1f mm, %.2f deg\n",
+      t.tour.length_m, 1e3 * end_pos, 100.0 * end_pos / t.tour.length_m,
+      std::abs(wrap_angle_rad(end.theta_rad - end_truth.theta_rad)) * 180 / M_PI, 1e3 * max_pos,
+      max_yaw * 180 / M_PI);
   EXPECT_LT(max_pos, 0.02 * t.tour.length_m);  // 2 % of the distance driven
   EXPECT_LT(max_yaw, 2.0 * M_PI / 180.0);
 }
@@ -337,8 +339,7 @@ TEST(CeilingMosaicSim, LocalisesWithoutAPriorAlongAndBesideTheTaughtPath) {
   std::vector<double> pos, yaw, pos_m, yaw_m;
   int failed = 0;
   for (size_t k = 0; k < t.tour.truth.size(); k += 15) {
-    for (const auto& [lateral_m, dyaw_deg] :
-         {std::pair{0.0, 0.0}, {0.3, 8.0}, {-0.3, -8.0}}) {
+    for (const auto& [lateral_m, dyaw_deg] : {std::pair{0.0, 0.0}, {0.3, 8.0}, {-0.3, -8.0}}) {
       sim::Pose2D p = t.tour.truth[k];
       p.x_m -= lateral_m * std::sin(p.yaw_rad);
       p.y_m += lateral_m * std::cos(p.yaw_rad);
@@ -357,13 +358,13 @@ TEST(CeilingMosaicSim, LocalisesWithoutAPriorAlongAndBesideTheTaughtPath) {
     }
   }
   ASSERT_FALSE(pos.empty());
-  std::printf("[ localise ] %zu poses (on the path, +-0.3 m and +-8 deg beside it), %d without "
-              "a fix; vs the mosaic: median %.1f mm, max %.1f mm, yaw median %.2f deg, max %.2f "
-              "deg; vs the truth: median %.1f mm, max %.1f mm, yaw max %.2f deg\n",
-              pos.size() + failed, failed, 1e3 * percentile(pos_m, 0.5),
-              1e3 * percentile(pos_m, 1.0), percentile(yaw_m, 0.5) * 180 / M_PI,
-              percentile(yaw_m, 1.0) * 180 / M_PI, 1e3 * percentile(pos, 0.5),
-              1e3 * percentile(pos, 1.0), percentile(yaw, 1.0) * 180 / M_PI);
+  std::printf(
+      "[ localise ] %zu poses (on the path, +-0.3 m and +-8 deg beside it), %d without "
+      "a fix; vs the mosaic: median %.1f mm, max %.1f mm, yaw median %.2f deg, max %.2f "
+      "deg; vs the truth: median %.1f mm, max %.1f mm, yaw max %.2f deg\n",
+      pos.size() + failed, failed, 1e3 * percentile(pos_m, 0.5), 1e3 * percentile(pos_m, 1.0),
+      percentile(yaw_m, 0.5) * 180 / M_PI, percentile(yaw_m, 1.0) * 180 / M_PI,
+      1e3 * percentile(pos, 0.5), 1e3 * percentile(pos, 1.0), percentile(yaw, 1.0) * 180 / M_PI);
   // Against the mosaic (what a replay needs): a few millimetres.
   EXPECT_LT(percentile(pos_m, 0.5), 0.01);
   EXPECT_LT(percentile(pos_m, 1.0), 0.04);
@@ -385,8 +386,8 @@ TEST(CeilingMosaicSim, APersonInFrontOfTheCameraDoesNotPreventTheFix) {
   const double px = at.x_m + 0.75 * std::cos(at.yaw_rad) - 0.15 * std::sin(at.yaw_rad);
   const double py = at.y_m + 0.75 * std::sin(at.yaw_rad) + 0.15 * std::cos(at.yaw_rad);
   std::string yaml = read_text(world_file());
-  yaml += "people:\n  - {name: person, path: [[" + std::to_string(px) + ", " +
-          std::to_string(py) + "]], speed_m_s: 0, size_m: [0.45, 0.3, 1.8], texture: floor}\n";
+  yaml += "people:\n  - {name: person, path: [[" + std::to_string(px) + ", " + std::to_string(py) +
+          "]], speed_m_s: 0, size_m: [0.45, 0.3, 1.8], texture: floor}\n";
   auto crowded = std::make_shared<const sim::World>(
       sim::parse_world(yaml, "ceiling_hall_person.yaml", world_file().parent_path()));
   sim::MockRobot robot(crowded);
@@ -418,13 +419,13 @@ TEST(CeilingMosaicSim, APersonInFrontOfTheCameraDoesNotPreventTheFix) {
   }
   const Trial trial = localise_at(t, robot, loc, at, kAt);
   const Trial unoccluded = localise_at(t, *t.robot, loc, at, kAt);
-  std::printf("[ localise ] person hides %.0f %% of the canonical view: fix %s, %d inliers of %d "
-              "matches (%d without the person), error vs the mosaic %.1f mm, %.2f deg (%.1f mm, "
-              "%.2f deg without)\n",
-              100 * occluded, trial.fix.found ? "found" : "NOT found", trial.fix.inliers,
-              trial.fix.matches, unoccluded.fix.inliers, 1e3 * trial.pos_vs_mosaic_m,
-              trial.yaw_vs_mosaic_rad * 180 / M_PI, 1e3 * unoccluded.pos_vs_mosaic_m,
-              unoccluded.yaw_vs_mosaic_rad * 180 / M_PI);
+  std::printf(
+      "[ localise ] person hides %.0f %% of the canonical view: fix %s, %d inliers of %d "
+      "matches (%d without the person), error vs the mosaic %.1f mm, %.2f deg (%.1f mm, "
+      "%.2f deg without)\n",
+      100 * occluded, trial.fix.found ? "found" : "NOT found", trial.fix.inliers, trial.fix.matches,
+      unoccluded.fix.inliers, 1e3 * trial.pos_vs_mosaic_m, trial.yaw_vs_mosaic_rad * 180 / M_PI,
+      1e3 * unoccluded.pos_vs_mosaic_m, unoccluded.yaw_vs_mosaic_rad * 180 / M_PI);
   ASSERT_GT(occluded, 0.2) << "the premise: the person must hide a good part of the view";
   ASSERT_TRUE(trial.fix.found);
   EXPECT_LT(trial.fix.inliers, unoccluded.fix.inliers);  // the person did hide landmarks
@@ -469,10 +470,11 @@ TEST(CeilingMosaicSim, RelayImagesOfTheTourSatisfyThePapersConditions) {
       turn_gap = std::min(turn_gap, gap);
     }
   }
-  std::printf("[ relay ] %zu relay images over %.2f m; mean spacing on the straight parts %.2f m, "
-              "closest in the turn %.2f m\n",
-              sel.relay_frames.size(), t.tour.length_m,
-              straight_n ? straight_gap / straight_n : 0.0, turn_gap);
+  std::printf(
+      "[ relay ] %zu relay images over %.2f m; mean spacing on the straight parts %.2f m, "
+      "closest in the turn %.2f m\n",
+      sel.relay_frames.size(), t.tour.length_m, straight_n ? straight_gap / straight_n : 0.0,
+      turn_gap);
   // The turn (pi/2 rad) needs at least pi/2 / 0.3 -> 6 relay images whatever the overlap.
   EXPECT_GE(sel.relay_frames.size(), 7u);
   if (const auto dir = figure_dir()) {

@@ -106,22 +106,22 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
       obs.orientation_base_rad.size() != obs.size() || obs.p_canon_px.size() != obs.size() ||
       obs.orientation_canon_rad.size() != obs.size())
     throw std::invalid_argument("MosaicBuilder::add_frame: observation fields of different sizes");
-  if (!obs.descriptors.empty() && (obs.descriptors.type() != CV_8U ||
-                                   obs.descriptors.cols != kMosaicDescriptorBytes))
+  if (!obs.descriptors.empty() &&
+      (obs.descriptors.type() != CV_8U || obs.descriptors.cols != kMosaicDescriptorBytes))
     throw std::invalid_argument("MosaicBuilder::add_frame: descriptors must be 32-byte ORB rows");
   const int64_t frame = static_cast<int64_t>(frames_.size());
   MosaicFrameResult result;
   const size_t n = obs.size();
   auto sighting = [&](int64_t id, size_t i) {
-    result.sightings.push_back(
-        {id, cv::Point2d(obs.p_canon_px[i]), obs.orientation_canon_rad[i]});
+    result.sightings.push_back({id, cv::Point2d(obs.p_canon_px[i]), obs.orientation_canon_rad[i]});
   };
 
   if (frame == 0) {
     // The first frame fixes the mosaic frame: its landmarks are placed directly.
     result.localised = true;
     for (size_t i = 0; i < n; ++i) {
-      add_landmark(obs.p_base_m[i], obs.orientation_base_rad[i], obs.descriptors.row(static_cast<int>(i)), frame);
+      add_landmark(obs.p_base_m[i], obs.orientation_base_rad[i],
+                   obs.descriptors.row(static_cast<int>(i)), frame);
       sighting(landmarks_.back().id, i);
     }
     result.added = static_cast<int>(n);

@@ -66,9 +66,8 @@ void MosaicLocaliser::match(const CeilingObservation& obs, Candidates candidates
     int best = std::numeric_limits<int>::max();
     size_t best_k = 0;
     candidates(i, [&](size_t k) {
-      const int dist =
-          cv::hal::normHamming(d_i, descriptors_.ptr<uchar>(static_cast<int>(k)),
-                               kMosaicDescriptorBytes);
+      const int dist = cv::hal::normHamming(d_i, descriptors_.ptr<uchar>(static_cast<int>(k)),
+                                            kMosaicDescriptorBytes);
       if (dist < best) {
         best = dist;
         best_k = k;
@@ -95,9 +94,12 @@ MosaicFix MosaicLocaliser::localise(const CeilingObservation& obs,
   if (obs.size() < 2) return fix;
   std::vector<size_t> oi, mi;
   if (prior) {
-    match(obs, [&](size_t i, auto&& visit) {
-      for (size_t k : within(prior->apply(obs.p_base_m[i]), options_.prior_radius_m)) visit(k);
-    }, oi, mi);
+    match(
+        obs,
+        [&](size_t i, auto&& visit) {
+          for (size_t k : within(prior->apply(obs.p_base_m[i]), options_.prior_radius_m)) visit(k);
+        },
+        oi, mi);
   } else {
     // No prior: the nearest descriptor in the whole mosaic (OpenCV's vectorised brute force).
     cv::BFMatcher matcher(cv::NORM_HAMMING);
@@ -133,9 +135,12 @@ MosaicFix MosaicLocaliser::localise(const CeilingObservation& obs,
   // elsewhere (repeated texture) are found near their predicted place.
   for (int round = 0; round < 2; ++round) {
     const PlanarPose T = fit.T_dst_src;
-    match(obs, [&](size_t i, auto&& visit) {
-      for (size_t k : within(T.apply(obs.p_base_m[i]), options_.refine_radius_m)) visit(k);
-    }, oi, mi);
+    match(
+        obs,
+        [&](size_t i, auto&& visit) {
+          for (size_t k : within(T.apply(obs.p_base_m[i]), options_.refine_radius_m)) visit(k);
+        },
+        oi, mi);
     pairs(src, dst);
     RigidRansacOptions refine = options_.ransac;
     refine.iterations = 100;  // the consensus is near T already

@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <random>
 #include <stdexcept>
 
 #include "core/ceiling/mosaic_builder.hpp"
@@ -25,7 +25,8 @@ Ceiling make_ceiling(uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-0.5, 0.5);
   for (int i = 0; i < 60; ++i)
-    for (int j = 0; j < 20; ++j) c.points_world.emplace_back(0.1 * i + 0.03 * u(rng), -1.0 + 0.1 * j + 0.03 * u(rng));
+    for (int j = 0; j < 20; ++j)
+      c.points_world.emplace_back(0.1 * i + 0.03 * u(rng), -1.0 + 0.1 * j + 0.03 * u(rng));
   c.descriptors.create(static_cast<int>(c.points_world.size()), kMosaicDescriptorBytes, CV_8U);
   cv::randu(c.descriptors, 0, 256);
   return c;
@@ -33,7 +34,8 @@ Ceiling make_ceiling(uint32_t seed) {
 
 cv::Mat random_descriptor(std::mt19937& rng) {
   cv::Mat d(1, kMosaicDescriptorBytes, CV_8U);
-  for (int b = 0; b < kMosaicDescriptorBytes; ++b) d.at<uint8_t>(0, b) = static_cast<uint8_t>(rng());
+  for (int b = 0; b < kMosaicDescriptorBytes; ++b)
+    d.at<uint8_t>(0, b) = static_cast<uint8_t>(rng());
   return d;
 }
 
@@ -147,12 +149,12 @@ TEST(MosaicLocaliser, FindsThePoseWithoutAPriorDespiteHalfTheViewBeingJunk) {
   for (int k = 0; k < 200; ++k) builder.add_frame(see(c, {0.2 + 0.02 * k, 0.0, 0.0}, 0, rng));
   const MosaicLocaliser loc(builder.mosaic());
   const PlanarPose T_world_mosaic{0.2, 0.0, 0.0};
-  for (const PlanarPose& world : {PlanarPose{1.5, 0.1, 0.3}, PlanarPose{3.0, -0.2, -0.25},
-                                  PlanarPose{2.2, 0.0, 3.0}}) {
+  for (const PlanarPose& world :
+       {PlanarPose{1.5, 0.1, 0.3}, PlanarPose{3.0, -0.2, -0.25}, PlanarPose{2.2, 0.0, 3.0}}) {
     const CeilingObservation o = see(c, world, /*junk=*/40, rng);
-    for (const auto& prior : {std::optional<PlanarPose>{},
-                              std::optional<PlanarPose>{T_world_mosaic.inverse() * world *
-                                                        PlanarPose{0.1, -0.05, 0.05}}}) {
+    for (const auto& prior :
+         {std::optional<PlanarPose>{}, std::optional<PlanarPose>{T_world_mosaic.inverse() * world *
+                                                                 PlanarPose{0.1, -0.05, 0.05}}}) {
       const MosaicFix fix = loc.localise(o, prior);
       ASSERT_TRUE(fix.found) << fix.matches << " matches";
       const PlanarPose expected = T_world_mosaic.inverse() * world;

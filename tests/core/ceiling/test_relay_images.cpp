@@ -78,8 +78,10 @@ TEST(RelayImages, ATurnOnTheSpotIsCutByTheOrientationCondition) {
     EXPECT_LT(c.orientation_change_rad, 0.3);
   }
   // Across the +-pi wrap: 170 deg and -170 deg orientations are 20 deg apart, not 340.
-  const std::vector<LandmarkSighting> a{{1, {0, 0}, 170 * M_PI / 180}, {2, {1, 0}, 170 * M_PI / 180}};
-  const std::vector<LandmarkSighting> b{{1, {0, 0}, -170 * M_PI / 180}, {2, {1, 0}, -170 * M_PI / 180}};
+  const std::vector<LandmarkSighting> a{{1, {0, 0}, 170 * M_PI / 180},
+                                        {2, {1, 0}, 170 * M_PI / 180}};
+  const std::vector<LandmarkSighting> b{{1, {0, 0}, -170 * M_PI / 180},
+                                        {2, {1, 0}, -170 * M_PI / 180}};
   RelayOptions two;
   two.min_shared_landmarks = 2;
   two.max_orientation_change_rad = 0.4;  // 20 deg = 0.349 rad passes, 340 deg would not

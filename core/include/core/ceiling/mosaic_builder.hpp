@@ -41,10 +41,10 @@
 namespace pepper::core::ceiling {
 
 struct MosaicBuilderOptions {
-  double px_per_m = 80.0;          ///< the canonical view's scale, recorded in the mosaic, > 0
-  double search_radius_m = 0.4;    ///< motion between two frames plus prediction error, > 0
-  int max_hamming = 64;            ///< of a descriptor match, bits in [1, 256]
-  int min_observations = 3;        ///< inlier sightings before a landmark is kept, >= 1
+  double px_per_m = 80.0;            ///< the canonical view's scale, recorded in the mosaic, > 0
+  double search_radius_m = 0.4;      ///< motion between two frames plus prediction error, > 0
+  int max_hamming = 64;              ///< of a descriptor match, bits in [1, 256]
+  int min_observations = 3;          ///< inlier sightings before a landmark is kept, >= 1
   int candidate_timeout_frames = 6;  ///< a candidate unseen this long is dropped, >= 1
   double min_separation_m = 0.015;   ///< no new landmark this close to an existing one, >= 0
   double landmark_step_m = 0.1;      ///< new landmarks only once the base moved this far, >= 0
@@ -68,8 +68,8 @@ struct MosaicFrameResult {
   PlanarPose T_mosaic_base;  ///< the frame's base pose in the mosaic frame
   int matches = 0;           ///< guided descriptor matches tried by RANSAC
   int inliers = 0;
-  double rms_m = 0.0;  ///< inliers' residual
-  int added = 0;       ///< new candidates
+  double rms_m = 0.0;                       ///< inliers' residual
+  int added = 0;                            ///< new candidates
   std::vector<LandmarkSighting> sightings;  ///< inlier (and new) landmarks of this frame
 };
 

@@ -20,9 +20,9 @@
 // Failure: no fix is a value (found = false, with the counts to say why); bad options or a mosaic
 // without landmarks throw std::invalid_argument. Immutable after construction: thread-safe.
 
-#include <optional>
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
+#include <optional>
 #include <vector>
 
 #include "core/ceiling/mosaic.hpp"
@@ -32,9 +32,9 @@
 namespace pepper::core::ceiling {
 
 struct LocaliserOptions {
-  int max_hamming = 64;            ///< of a descriptor match, bits in [1, 256]
-  double prior_radius_m = 0.5;     ///< search radius around a prior's prediction, > 0
-  double refine_radius_m = 0.06;   ///< search radius of the guided re-matching, > 0
+  int max_hamming = 64;           ///< of a descriptor match, bits in [1, 256]
+  double prior_radius_m = 0.5;    ///< search radius around a prior's prediction, > 0
+  double refine_radius_m = 0.06;  ///< search radius of the guided re-matching, > 0
   double min_inlier_ratio = 0.1;  ///< final inliers / first-step matches, in [0, 1]
   RigidRansacOptions ransac{0.04, 12, 2000, 1};
 

@@ -22,11 +22,11 @@
 namespace pepper::core::ceiling {
 
 struct CeilingObservation {
-  std::vector<cv::Point2d> p_base_m;         ///< ceiling point, base frame
-  std::vector<double> orientation_base_rad;  ///< base frame, counter-clockwise from above
-  std::vector<cv::Point2f> p_canon_px;       ///< where it was seen in the canonical view
-  std::vector<double> orientation_canon_rad; ///< its orientation there (image axes, y down)
-  cv::Mat descriptors;                       ///< one ORB row per landmark (CV_8U)
+  std::vector<cv::Point2d> p_base_m;          ///< ceiling point, base frame
+  std::vector<double> orientation_base_rad;   ///< base frame, counter-clockwise from above
+  std::vector<cv::Point2f> p_canon_px;        ///< where it was seen in the canonical view
+  std::vector<double> orientation_canon_rad;  ///< its orientation there (image axes, y down)
+  cv::Mat descriptors;                        ///< one ORB row per landmark (CV_8U)
 
   size_t size() const { return p_base_m.size(); }
 };

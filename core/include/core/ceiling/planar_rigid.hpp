@@ -48,7 +48,7 @@ struct RigidRansacOptions {
 
 struct RigidFit {
   bool found = false;
-  PlanarPose T_dst_src;        ///< least squares on the inliers
+  PlanarPose T_dst_src;         ///< least squares on the inliers
   std::vector<uint8_t> inlier;  ///< per pair, 1 = inlier (empty when not found)
   int inliers = 0;
   double rms_m = 0.0;  ///< of the inliers' residuals
