@@ -90,6 +90,9 @@ MosaicFix MosaicLocaliser::localise(const CeilingObservation& obs,
                                     const std::optional<PlanarPose>& prior) const {
   if (obs.descriptors.rows != static_cast<int>(obs.size()))
     throw std::invalid_argument("MosaicLocaliser::localise: one descriptor per landmark expected");
+  if (!obs.descriptors.empty() &&
+      (obs.descriptors.type() != CV_8U || obs.descriptors.cols != kMosaicDescriptorBytes))
+    throw std::invalid_argument("MosaicLocaliser::localise: descriptors must be 32-byte ORB rows");
   MosaicFix fix;
   if (obs.size() < 2) return fix;
   std::vector<size_t> oi, mi;

@@ -167,6 +167,9 @@ TEST(MosaicLocaliser, FindsThePoseWithoutAPriorDespiteHalfTheViewBeingJunk) {
   CeilingObservation junk = see(c, {100.0, 0.0, 0.0}, 60, rng);
   EXPECT_FALSE(loc.localise(junk).found);
   EXPECT_THROW(MosaicLocaliser(Mosaic{}), std::invalid_argument);
+  CeilingObservation wrong_descriptors = see(c, {1.5, 0.1, 0.3}, 0, rng);
+  wrong_descriptors.descriptors.convertTo(wrong_descriptors.descriptors, CV_32F);
+  EXPECT_THROW(loc.localise(wrong_descriptors), std::invalid_argument);
   LocaliserOptions bad;
   bad.min_inlier_ratio = 2.0;
   EXPECT_THROW(MosaicLocaliser(builder.mosaic(), bad), std::invalid_argument);

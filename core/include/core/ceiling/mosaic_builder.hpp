@@ -25,7 +25,9 @@
 // is compared only with mosaic landmarks within `search_radius_m` of where the previous pose puts
 // it, best Hamming distance <= `max_hamming`, each mosaic landmark used once. A frame without
 // consensus (too few inliers) is reported as not localised and adds nothing; the next frame is
-// matched with the last good pose.
+// matched with the last good pose. There is no global re-localisation during teach: a teach that
+// loses the ceiling while the base moves farther than search_radius_m stays lost (every later
+// frame reports localised = false); the session (to come) must stop or warn.
 // Errors: bad options throw std::invalid_argument naming the field. Not thread-safe (one teach).
 
 #include <cstdint>
