@@ -1,6 +1,7 @@
 #pragma once
 // Ceiling landmarks on the canonical view (issue 24, first step towards the mosaic): ORB corners
-// with binary descriptors (cv::ORB), and frame-to-frame tracking by descriptor matching and a
+// with binary descriptors (cv::ORB), refined to sub-pixel positions, and frame-to-frame
+// tracking by descriptor matching and a
 // robust planar similarity (cv::estimateAffinePartial2D, RANSAC). In the canonical view
 // (canonical_view.hpp) the ceiling moves rigidly with the base, so the fitted transform is a
 // rotation and a translation; its scale stays 1 within noise, which is reported as a check.
@@ -22,6 +23,8 @@ struct LandmarkOptions {
   int max_landmarks = 400;  ///< ORB's feature budget, > 0
   int fast_threshold = 10;  ///< FAST threshold of ORB's detector, grey levels, > 0
   int border_px = 16;       ///< kept away from the unseen area, so descriptors see only ceiling
+  /// Sub-pixel corner refinement (cv::cornerSubPix) half-window, px; 0 = ORB's whole pixels.
+  int subpixel_window_px = 2;
 };
 
 struct CeilingLandmarks {

@@ -1,12 +1,13 @@
 #pragma once
 // The ceiling mosaic's data (issue 24; Blanc et al. 2004): the 2D landmarks lying on the ceiling
 // plane, each with its planar pose in the mosaic frame and its descriptor, and the file that
-// holds them. Only the structure and its file exist: nothing builds a mosaic yet (teach does not
-// run in ceiling mode, docs/method/ceiling.md).
+// holds them. MosaicBuilder (mosaic_builder.hpp) builds one from teach frames; teach does not run
+// in ceiling mode yet and maps do not reference the file (docs/method/ceiling.md).
 //
-// Frame and units: the mosaic frame is a planar frame on the ceiling, metres, angles in radians
-// counter-clockwise seen from BELOW (as in the canonical view, which is a camera image seen from
-// below); the builder (to come) fixes its origin at the first relay image.
+// Frame and units: the mosaic frame is the robot's base frame at the first teach frame, projected
+// on the ceiling plane: x forward, y left, metres, angles in radians counter-clockwise seen from
+// ABOVE (as the base frame and the odometry, docs/conventions.md). A landmark's orientation is
+// its ORB orientation expressed in those axes (observation.hpp).
 //
 // File (one JSON file, e.g. MAP/mosaic.json): {"format": "pepper-ceiling-mosaic",
 // "format_version": 1, "px_per_m": the canonical scale the landmarks were seen at, "landmarks":
