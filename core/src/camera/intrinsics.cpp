@@ -34,6 +34,22 @@ CameraIntrinsics CameraIntrinsics::pepper_top_vga() {
   return qvga.scaled_to(640, 480);
 }
 
+CameraIntrinsics CameraIntrinsics::pepper_top_vga_with_distortion() {
+  // The same calibration's perspectiveProjWithDistortion model (cameras/pepper_top.xml, rounded
+  // as there) scaled to VGA; kud and kdu are in normalised units and do not scale.
+  CameraIntrinsics qvga;
+  qvga.width_px = 320;
+  qvga.height_px = 240;
+  qvga.fx_px = 300.0232;
+  qvga.fy_px = 300.9510;
+  qvga.cx_px = 159.2219;
+  qvga.cy_px = 119.5549;
+  qvga.model = ProjectionModel::kWithDistortion;
+  qvga.kud = 0.0275116;
+  qvga.kdu = -0.0273748;
+  return qvga.scaled_to(640, 480);
+}
+
 CameraIntrinsics CameraIntrinsics::scaled_to(int new_width_px, int new_height_px) const {
   CameraIntrinsics k = *this;
   const double sx = static_cast<double>(new_width_px) / width_px;

@@ -73,13 +73,14 @@ CameraIntrinsics load_visp_camera_xml(const std::string& path, const std::string
       saw_name = true;
       const bool sized = e.width_px > 0 && e.height_px > 0;
       if (size_requested && sized && (e.width_px != width_px || e.height_px != height_px)) continue;
-      // The model: the one asked for; else the pinhole model when the camera has it, since the
-      // features are not undistorted yet (intrinsics.hpp); else the model with distortion.
-      ProjectionModel chosen = ProjectionModel::kWithoutDistortion;
+      // The model: the one asked for; else the model with distortion when the camera has it
+      // (the features are undistorted through it, core/camera/distortion.hpp, so the fuller
+      // calibration is the better one); else the pinhole.
+      ProjectionModel chosen = ProjectionModel::kWithDistortion;
       if (model) {
         chosen = *model;
-      } else if (!has_model(e, ProjectionModel::kWithoutDistortion)) {
-        chosen = ProjectionModel::kWithDistortion;
+      } else if (!has_model(e, ProjectionModel::kWithDistortion)) {
+        chosen = ProjectionModel::kWithoutDistortion;
       }
       if (!has_model(e, chosen)) continue;
       const visp_adapter::CameraCalibration c =

@@ -12,6 +12,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <opencv2/ximgproc/edge_drawing.hpp>
 
+#include "core/camera/distortion.hpp"
 #include "core/features/band_descriptor.hpp"
 
 namespace pepper::core::features {
@@ -75,8 +76,10 @@ std::vector<LineSegment> detect_lines(const cv::Mat& gray, const CameraIntrinsic
     LineSegment s;
     s.p0_px = p0;
     s.p1_px = p1;
-    s.p0_norm = k.normalize(cv::Point2d(p0));
-    s.p1_norm = k.normalize(cv::Point2d(p1));
+    // The endpoints through the lens model (pixel_to_norm): the segment's line is then that of
+    // the undistorted endpoints (docs/perception.md "Lens distortion").
+    s.p0_norm = camera::pixel_to_norm(k, cv::Point2d(p0));
+    s.p1_norm = camera::pixel_to_norm(k, cv::Point2d(p1));
     s.line = rho_theta_from_points(s.p0_norm, s.p1_norm);
     s.length_px = len;
     out.push_back(s);
@@ -213,7 +216,7 @@ std::vector<std::string> FeatureExtractorOptions::validate() const {
 std::vector<cv::Point2d> ImageFeatures::corners_norm() const {
   std::vector<cv::Point2d> out;
   out.reserve(corners_px.size());
-  for (const auto& p : corners_px) out.push_back(intrinsics.normalize(cv::Point2d(p)));
+  for (const auto& p : corners_px) out.push_back(camera::pixel_to_norm(intrinsics, cv::Point2d(p)));
   return out;
 }
 

@@ -21,6 +21,8 @@
 #include <opencv2/core/hal/hal.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "core/camera/distortion.hpp"
+
 namespace pepper::core::features {
 namespace {
 
@@ -510,8 +512,8 @@ void track_and_verify_points(const ImageFeatures& a, const ImageFeatures& b,
     m.idx_a = static_cast<int>(i);
     m.a_px = a.corners_px[i];
     m.b_px = t.b_px[i];
-    m.a_norm = a.intrinsics.normalize(cv::Point2d(m.a_px));
-    m.b_norm = b.intrinsics.normalize(cv::Point2d(m.b_px));
+    m.a_norm = camera::pixel_to_norm(a.intrinsics, cv::Point2d(m.a_px));
+    m.b_norm = camera::pixel_to_norm(b.intrinsics, cv::Point2d(m.b_px));
     cands.push_back(m);
     cost.push_back(t.error[i]);
   }
@@ -601,8 +603,8 @@ TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& 
       m.idx_b = j1;
       m.a_px = a.keypoints[static_cast<size_t>(i)].pt;
       m.b_px = b.keypoints[static_cast<size_t>(j1)].pt;
-      m.a_norm = a.intrinsics.normalize(cv::Point2d(m.a_px));
-      m.b_norm = b.intrinsics.normalize(cv::Point2d(m.b_px));
+      m.a_norm = camera::pixel_to_norm(a.intrinsics, cv::Point2d(m.a_px));
+      m.b_norm = camera::pixel_to_norm(b.intrinsics, cv::Point2d(m.b_px));
       cands.push_back(m);
       cost.push_back(static_cast<float>(d1));
     }
@@ -678,7 +680,7 @@ ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches&
     m.idx_x = px[i].idx_a;
     m.idx_y = py[static_cast<size_t>(j)].idx_a;
     m.hub_px = 0.5f * (px[i].b_px + py[static_cast<size_t>(j)].b_px);
-    m.hub_norm = hub.intrinsics.normalize(cv::Point2d(m.hub_px));
+    m.hub_norm = camera::pixel_to_norm(hub.intrinsics, cv::Point2d(m.hub_px));
     r.points.push_back(m);
   }
   return r;

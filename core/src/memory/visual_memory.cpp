@@ -289,6 +289,18 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
                          " must be given for every key image or none, >= 0 and never decreasing");
     }
   }
+  // Every key image's features went through the map camera's projection model: the file keeps
+  // only its pinhole part and load_map gives it the map's model back, so a key image
+  // normalised through another model would come back undistorted differently.
+  for (size_t i = 0; i < map.key_images.size(); ++i) {
+    const CameraIntrinsics& k = map.key_images[i].features.intrinsics;
+    if (k.model != map.camera.model || k.kud != map.camera.kud || k.kdu != map.camera.kdu) {
+      throw MapError(Kind::kInvalidMap, dir,
+                     dir.string() + ": key image " + std::to_string(i) + ": camera model " +
+                         to_string(k.model) + " differs from the map's " +
+                         to_string(map.camera.model));
+    }
+  }
   for (size_t i = 0; i < map.key_images.size(); ++i) {
     if (map.key_images[i].odom && !finite(*map.key_images[i].odom)) {
       throw MapError(
@@ -443,6 +455,12 @@ VisualMemory load_map(const fs::path& dir, const LoadOptions& options) {
       throw MapError(Kind::kIntrinsicsMismatch, feat_path,
                      feat_path.string() + ": image size differs from the manifest camera");
     }
+    // A feature file holds the pinhole part of the camera; the projection model is the map's
+    // (the manifest records it), and the key image's corners are undistorted through it when
+    // matched, as the current frame's are (core/camera/distortion.hpp).
+    key.features.intrinsics.model = m.camera.model;
+    key.features.intrinsics.kud = m.camera.kud;
+    key.features.intrinsics.kdu = m.camera.kdu;
     key.features.gray = gray;
     if (options.build_klt_pyramids) features::build_klt_pyramid(key.features);
     map.key_images.push_back(std::move(key));

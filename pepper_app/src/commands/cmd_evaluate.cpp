@@ -36,6 +36,8 @@ struct EvaluateArgs {
   std::vector<std::string> disturbances{"none"};
   bool compare_features = false;
   std::string size = "640x480";
+  std::string lens = "none";            ///< --lens: none or pepper (the mock's lens)
+  std::string lens_correction = "on";   ///< --lens-correction: on or off
   std::string mode = "forward";  ///< --mode (core/nav_mode.hpp): only forward is implemented
   double lateral_m = 0.3;
   double yaw_deg = 10.0;
@@ -87,6 +89,7 @@ int run_evaluate(const EvaluateArgs& a) {
       modes = {parse_features(a.features)};
     }
     for (const auto& d : a.disturbances) configs.push_back(parse_disturbance_set(d));
+    ev::set_lens_options(a.lens, a.lens_correction, o);
     if (!a.controller.empty() && a.controller != "ibvs" && a.controller != "vnhv") {
       throw std::invalid_argument("--controller must be ibvs or vnhv, got '" + a.controller + "'");
     }
@@ -219,6 +222,14 @@ void register_evaluate_command(CLI::App& app) {
   cmd->add_flag("--compare-features", args->compare_features,
                 "Run lines only, points only and both, side by side");
   cmd->add_option("--size", args->size, "Camera size, 640x480 or 320x240 (faster)")
+      ->capture_default_str();
+  cmd->add_option("--lens", args->lens,
+                  "The mock camera's lens: none (pinhole) or pepper (Pepper's top-camera "
+                  "calibration with ViSP's distortion model, kud 0.0275)")
+      ->capture_default_str();
+  cmd->add_option("--lens-correction", args->lens_correction,
+                  "on: the app's camera model has the lens's distortion and undistorts the "
+                  "features; off: the app takes the pinhole calibration of the same camera")
       ->capture_default_str();
   cmd->add_option("--lateral-m", args->lateral_m, "Start perturbation, lateral, +- metres")
       ->capture_default_str();

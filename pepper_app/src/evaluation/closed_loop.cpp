@@ -107,10 +107,12 @@ TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
   sim::MockRobotOptions ro;
   ro.lighting = "teach";
   ro.render.noise_seed = options.seed;
+  ro.intrinsics_vga = mock_camera_vga(options);
   RobotConnection robot = open_mock_robot(world, ro, {});
   TeachSessionOptions so;
   so.map_dir = out.map_dir;
   so.camera = camera_request(options);
+  so.camera_model = app_camera_model(options);
   so.head = options.head;
   so.teach.selector = options.key_images;
   so.teach.extractor = options.navigator.extractor;
@@ -143,7 +145,9 @@ TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
   out.wall_s = seconds_since(t0);
   if (progress) {
     std::ostringstream os;
-    os << "teach " << world->name << single_modality_tag(options.features, " [", "]") << ": "
+    os << "teach " << world->name << single_modality_tag(options.features, " [", "]");
+    if (options.lens != EvaluationOptions::Lens::kNone) os << " (lens: " << lens_label(options) << ")";
+    os << ": "
        << out.frames << " frames, "
        << fmt("%.2f", out.length_m) << " m, " << out.map.key_images.size() << " key images ("
        << fmt("%.2f", key_images_per_m(static_cast<int>(out.map.key_images.size()), out.length_m))
@@ -175,6 +179,7 @@ namespace {
 void set_run_options(MockReplaySetup& setup, int k, const std::string& lighting,
                      const EvaluationOptions& options) {
   setup.robot.lighting = lighting;
+  setup.robot.intrinsics_vga = mock_camera_vga(options);
   setup.robot.render.noise_seed = options.seed * 1000 + static_cast<uint64_t>(k) + 1;
   if (options.disturbances.count(Disturbance::kLatency)) {
     setup.robot.kinematics.latency_s = options.disturbance.latency_s;
@@ -193,6 +198,44 @@ MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const st
   setup.start = replay_start_pose(start_world, k, options);
   set_run_options(setup, k, lighting, options);
   return setup;
+}
+
+void set_lens_options(const std::string& lens, const std::string& correction,
+                      EvaluationOptions& options) {
+  if (lens == "none") {
+    options.lens = EvaluationOptions::Lens::kNone;
+  } else if (lens == "pepper") {
+    options.lens = EvaluationOptions::Lens::kPepper;
+  } else {
+    throw std::invalid_argument("--lens must be none or pepper, got '" + lens + "'");
+  }
+  if (correction == "on") {
+    options.correct_lens = true;
+  } else if (correction == "off") {
+    options.correct_lens = false;
+  } else {
+    throw std::invalid_argument("--lens-correction must be on or off, got '" + correction + "'");
+  }
+}
+
+core::CameraIntrinsics mock_camera_vga(const EvaluationOptions& options) {
+  return options.lens == EvaluationOptions::Lens::kPepper
+             ? core::CameraIntrinsics::pepper_top_vga_with_distortion()
+             : core::CameraIntrinsics::pepper_top_vga();
+}
+
+std::optional<core::CameraIntrinsics> app_camera_model(const EvaluationOptions& options) {
+  // Without correction the app holds the pinhole calibration of the same camera, as a robot
+  // whose calibration file has no distortion model would give it (the bridge reports the lens).
+  if (options.lens != EvaluationOptions::Lens::kNone && !options.correct_lens) {
+    return core::CameraIntrinsics::pepper_top_vga();
+  }
+  return std::nullopt;
+}
+
+std::string lens_label(const EvaluationOptions& options) {
+  if (options.lens == EvaluationOptions::Lens::kNone) return "none";
+  return options.correct_lens ? "pepper" : "pepper uncorrected";
 }
 
 naoqi_bridge::CameraRequest camera_request(const EvaluationOptions& options) {
@@ -419,6 +462,7 @@ RunResult replay_run(const TeachResult& teach,
   }
 
   std::vector<double> travelled, lateral, omega, t, step_ms;
+  double lines_sum = 0.0, points_sum = 0.0;
   for (const RunSample& s : r.samples) {
     travelled.push_back(s.travelled_m);
     lateral.push_back(s.lateral_m);
@@ -426,7 +470,13 @@ RunResult replay_run(const TeachResult& teach,
       omega.push_back(s.omega_rad_s);
       t.push_back(s.t_s);
       step_ms.push_back(s.step_ms);
+      lines_sum += s.n_lines;
+      points_sum += s.n_points;
     }
+  }
+  if (!t.empty()) {
+    r.verified_lines_mean = lines_sum / static_cast<double>(t.size());
+    r.verified_points_mean = points_sum / static_cast<double>(t.size());
   }
   const DeviationStats ds =
       lateral_stats(travelled, lateral, options.converged_after_m, options.converged_below_m);
@@ -450,7 +500,7 @@ Summary summarize(const std::vector<RunResult>& runs, int key_images, double tau
                   double arrival_tolerance_m) {
   Summary s;
   s.runs = static_cast<int>(runs.size());
-  std::vector<double> rmss, errors, rates, steps;
+  std::vector<double> rmss, errors, rates, steps, lines, points;
   s.lateral_max_m = 0.0;
   s.converged_from_max_m = 0.0;
   for (const RunResult& r : runs) {
@@ -459,6 +509,8 @@ Summary summarize(const std::vector<RunResult>& runs, int key_images, double tau
                                  : std::max(s.converged_from_max_m, r.converged_from_m);
     s.successes += r.success ? 1 : 0;
     if (std::isfinite(r.lateral_rms_m)) rmss.push_back(r.lateral_rms_m);
+    if (std::isfinite(r.verified_lines_mean)) lines.push_back(r.verified_lines_mean);
+    if (std::isfinite(r.verified_points_mean)) points.push_back(r.verified_points_mean);
     if (std::isfinite(r.lateral_max_m)) s.lateral_max_m = std::max(s.lateral_max_m, r.lateral_max_m);
     errors.push_back(r.final_error_m);
     if (!r.arrival_verdict.empty()) {
@@ -479,6 +531,8 @@ Summary summarize(const std::vector<RunResult>& runs, int key_images, double tau
   };
   s.success_rate = s.runs > 0 ? static_cast<double>(s.successes) / s.runs : 0.0;
   s.lateral_rms_m = mean(rmss);
+  s.verified_lines_mean = mean(lines);
+  s.verified_points_mean = mean(points);
   if (rmss.empty()) s.lateral_max_m = kNaN;
   s.final_error_mean_m = mean(errors);
   s.final_error_max_m = errors.empty() ? kNaN : *std::max_element(errors.begin(), errors.end());
@@ -499,6 +553,7 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
   ev.features = feature_label(options.features);
   ev.controller = core::navigator::to_string(options.navigator.controller);
   ev.size = std::to_string(options.width_px) + "x" + std::to_string(options.height_px);
+  ev.lens = lens_label(options);
   for (Disturbance d : options.disturbances) ev.disturbances.push_back(to_string(d));
   ev.key_images = static_cast<int>(teach.map.key_images.size());
   ev.taught_length_m = teach.length_m;
@@ -530,7 +585,9 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
       os << ", " << fmt("%.1f", r.travelled_m) << " m, converged from "
          << fmt("%.1f", r.converged_from_m) << " m, lateral rms "
          << fmt("%.1f", 100 * r.lateral_rms_m) << " cm max " << fmt("%.1f", 100 * r.lateral_max_m)
-         << " cm, end error " << fmt("%.1f", 100 * r.final_error_m) << " cm, step "
+         << " cm, end error " << fmt("%.1f", 100 * r.final_error_m) << " cm, verified with IN "
+         << fmt("%.1f", r.verified_lines_mean) << " lines " << fmt("%.1f", r.verified_points_mean)
+         << " points, step "
          << fmt("%.1f", r.step_ms_median) << " ms, " << r.frames << " frames in "
          << fmt("%.1f", r.wall_s) << " s";
       progress(os.str());

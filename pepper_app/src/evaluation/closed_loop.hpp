@@ -29,6 +29,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -56,6 +57,16 @@ struct EvaluationOptions {
   uint64_t seed = 1;                ///< start perturbations (0: none), disturbances, noise
   int width_px = 640;               ///< camera size (VGA; 320x240 for quick runs)
   int height_px = 480;
+  /// The mock's lens (`evaluate --lens`, issue 31). kPepper: the mock renders through Pepper's
+  /// top-camera calibration with ViSP's distortion model
+  /// (CameraIntrinsics::pepper_top_vga_with_distortion(), kud 0.0275); kNone: the pinhole
+  /// calibration pepper_top_vga().
+  enum class Lens { kNone, kPepper };
+  Lens lens = Lens::kNone;
+  /// `--lens-correction`: true, the app takes the camera model the mock reports, so a lens's
+  /// features are undistorted (core/camera/distortion.hpp); false, the app takes the pinhole
+  /// calibration pepper_top_vga() of the same camera whatever the lens (no correction).
+  bool correct_lens = true;
   /// Lines, points or both: teach (key-image selection) and replay match only these.
   core::control::FeatureMode features = core::control::FeatureMode::kLinesAndPoints;
   /// Start perturbations (uniform, +-): replaces the world's own ranges. The start of run k is
@@ -132,6 +143,10 @@ struct RunResult {
   std::string detail;         ///< e.g. what was hit
   bool tour_complete = false;
   double travelled_m = 0.0;
+  /// Verified matches with IN (RunSample::n_lines, n_points), mean over the frames received
+  /// (NaN: none).
+  double verified_lines_mean = std::numeric_limits<double>::quiet_NaN();
+  double verified_points_mean = std::numeric_limits<double>::quiet_NaN();
   double lateral_rms_m = 0.0;  ///< converged part
   double lateral_max_m = 0.0;  ///< converged part
   double converged_from_m = -1.0;  ///< travelled distance where the converged part starts
@@ -171,6 +186,8 @@ struct Summary {
   int successes = 0;
   double success_rate = 0.0;
   double lateral_rms_m = 0.0;    ///< mean over runs of the per-run RMS (runs with samples)
+  double verified_lines_mean = 0.0;   ///< mean over runs of RunResult::verified_lines_mean
+  double verified_points_mean = 0.0;  ///< mean over runs of RunResult::verified_points_mean
   double lateral_max_m = 0.0;    ///< max over runs of the per-run max
   double final_error_mean_m = 0.0;
   double final_error_max_m = 0.0;
@@ -190,6 +207,7 @@ struct Evaluation {
   std::string features;      ///< "lines+points", "lines", "points"
   std::string controller;    ///< "ibvs", "vnhv"
   std::string size;          ///< "640x480"
+  std::string lens;          ///< lens_label(): "none", "pepper", "pepper uncorrected"
   std::vector<std::string> disturbances;
   std::vector<std::string> disturbance_notes;
   int key_images = 0;
@@ -221,6 +239,19 @@ struct MockReplaySetup {
 };
 MockReplaySetup mock_replay_setup(const sim::World& start_world, int k, const std::string& lighting,
                                   const EvaluationOptions& options);
+
+/// `evaluate --lens NAME --lens-correction on|off` into options.lens and correct_lens. Throws
+/// std::invalid_argument naming the option and its allowed values.
+void set_lens_options(const std::string& lens, const std::string& correction,
+                      EvaluationOptions& options);
+
+/// The camera the mock renders with, at VGA (options.lens).
+core::CameraIntrinsics mock_camera_vga(const EvaluationOptions& options);
+/// The camera model the app teaches with instead of the one the mock reports (options.lens and
+/// correct_lens); std::nullopt: the mock's.
+std::optional<core::CameraIntrinsics> app_camera_model(const EvaluationOptions& options);
+/// "none", "pepper" (rendered through the lens, corrected) or "pepper uncorrected".
+std::string lens_label(const EvaluationOptions& options);
 
 /// The camera request of teach and replay (the options' size, the mock's 15 fps).
 naoqi_bridge::CameraRequest camera_request(const EvaluationOptions& options);

@@ -31,6 +31,8 @@ json summary_json(const Summary& s) {
           {"success_rate", s.success_rate},
           {"lateral_rms_m", num(s.lateral_rms_m)},
           {"lateral_max_m", num(s.lateral_max_m)},
+          {"verified_lines_mean", num(s.verified_lines_mean)},
+          {"verified_points_mean", num(s.verified_points_mean)},
           {"final_error_mean_m", num(s.final_error_mean_m)},
           {"final_error_max_m", num(s.final_error_max_m)},
           {"key_images_per_m", num(s.key_images_per_m)},
@@ -61,6 +63,8 @@ json run_json(const RunResult& r) {
           {"travelled_m", r.travelled_m},
           {"lateral_rms_m", num(r.lateral_rms_m)},
           {"lateral_max_m", num(r.lateral_max_m)},
+          {"verified_lines_mean", num(r.verified_lines_mean)},
+          {"verified_points_mean", num(r.verified_points_mean)},
           {"converged_from_m", num(r.converged_from_m)},
           {"first_under_5cm_m", num(r.first_under_5cm_m)},
           {"final_error_m", num(r.final_error_m)},
@@ -96,6 +100,7 @@ json to_json(const std::vector<Evaluation>& evaluations) {
                     {"features", e.features},
                     {"controller", e.controller},
                     {"size", e.size},
+                    {"lens", e.lens},
                     {"disturbances", e.disturbances},
                     {"disturbance_notes", e.disturbance_notes},
                     {"key_images", e.key_images},
@@ -117,7 +122,7 @@ std::string summary_table(const std::vector<Evaluation>& evaluations) {
   const std::vector<std::pair<std::string, size_t>> cols = {
       {"world", 20},      {"features", 13},    {"disturbance", 13}, {"success", 8},
       {"conv m", 7},      {"lat rms cm", 11}, {"lat max cm", 11},  {"end err cm", 11}, {"KI/m", 6},
-      {"dw rms", 8},      {"step ms p50", 12}, {"p95", 6}};
+      {"dw rms", 8},      {"IN lines/pts", 13}, {"step ms p50", 12}, {"p95", 6}};
   for (const auto& [name, w] : cols) os << pad(name, w);
   os << "\n";
   for (const Evaluation& e : evaluations) {
@@ -130,7 +135,9 @@ std::string summary_table(const std::vector<Evaluation>& evaluations) {
        << pad(fmt("%.2f", s.converged_from_max_m), 7)
        << pad(fmt("%.1f", 100 * s.lateral_rms_m), 11) << pad(fmt("%.1f", 100 * s.lateral_max_m), 11)
        << pad(fmt("%.1f", 100 * s.final_error_mean_m), 11) << pad(fmt("%.2f", s.key_images_per_m), 6)
-       << pad(fmt("%.2f", s.omega_rate_rms_rad_s2), 8) << pad(fmt("%.1f", s.step_ms_median), 12)
+       << pad(fmt("%.2f", s.omega_rate_rms_rad_s2), 8)
+       << pad(fmt("%.0f", s.verified_lines_mean) + "/" + fmt("%.0f", s.verified_points_mean), 13)
+       << pad(fmt("%.1f", s.step_ms_median), 12)
        << pad(fmt("%.1f", s.step_ms_p95), 6) << "\n";
   }
   return os.str();

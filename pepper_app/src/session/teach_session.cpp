@@ -37,6 +37,9 @@ std::vector<std::string> TeachSessionOptions::validate() const {
     e.push_back("max_omega_rad_s must be in (0, 2]");
   for (const auto& m : teach.validate()) e.push_back("teach: " + m);
   for (const auto& m : feedback.validate()) e.push_back("feedback: " + m);
+  if (camera_model) {
+    for (const auto& m : camera_model->validate()) e.push_back("camera_model." + m);
+  }
   return e;
 }
 
@@ -163,7 +166,11 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       result.warnings.push_back("head lock not holding: max error " +
                                 std::to_string(head.max_error_rad) + " rad");
     }
-    const core::CameraIntrinsics camera = bridge.start_camera(options.camera);
+    const core::CameraIntrinsics started = bridge.start_camera(options.camera);
+    const core::CameraIntrinsics camera =
+        options.camera_model
+            ? options.camera_model->scaled_to(started.width_px, started.height_px)
+            : started;
     link.publish_state({{"connection",
                          {{"robot", "connected"},
                           {"head_locked", head.holding},

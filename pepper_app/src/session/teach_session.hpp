@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,10 @@ struct TeachSessionOptions {
   /// evaluation, which re-teaches from the world file). The CLI always records.
   std::filesystem::path recording_dir;
   naoqi_bridge::CameraRequest camera;
+  /// The camera model the features are normalised with, instead of the one the bridge reports
+  /// (scaled to the started camera's size); recorded in the map and the recording. The
+  /// evaluation's `--lens-correction off` gives the pinhole model of a lens the mock renders.
+  std::optional<core::CameraIntrinsics> camera_model;
   naoqi_bridge::HeadLockRequest head;
   core::mapping::TeachOptions teach;
   std::string config_json = "{}";       ///< effective configuration, stored in map + recording

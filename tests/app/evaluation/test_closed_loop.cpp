@@ -275,13 +275,20 @@ TEST(Output, JsonHasSummaryAndRuns) {
   b.lateral_rms_m = 0.04;
   b.lateral_max_m = 0.12;
   b.final_error_m = 0.3;
+  a.verified_lines_mean = 40.0;
+  a.verified_points_mean = 100.0;
+  b.verified_lines_mean = 20.0;  // b's points: none measured (NaN), left out of the mean
   e.runs = {a, b};
   e.summary = summarize(e.runs, 10, 5.0);
   EXPECT_NEAR(e.summary.success_rate, 0.5, 1e-12);
   EXPECT_NEAR(e.summary.lateral_rms_m, 0.03, 1e-12);  // mean of per-run RMS
   EXPECT_NEAR(e.summary.lateral_max_m, 0.12, 1e-12);  // max over runs
   EXPECT_NEAR(e.summary.key_images_per_m, 2.0, 1e-12);
+  EXPECT_NEAR(e.summary.verified_lines_mean, 30.0, 1e-12);  // mean over runs
+  EXPECT_NEAR(e.summary.verified_points_mean, 100.0, 1e-12);
   const auto j = to_json({e});
+  EXPECT_NEAR(j["summary"]["verified_lines_mean"].get<double>(), 30.0, 1e-12);
+  EXPECT_TRUE(j["runs"][1]["verified_points_mean"].is_null());
   EXPECT_EQ(j["summary"]["success_rate"].get<double>(), 0.5);
   EXPECT_NEAR(j["summary"]["lateral_rms_m"].get<double>(), 0.03, 1e-12);
   EXPECT_EQ(j["runs"].size(), 2u);

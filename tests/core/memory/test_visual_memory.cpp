@@ -220,11 +220,32 @@ TEST_F(VisualMemoryTest, ProjectionModelIsRecordedAndAMismatchNamesBothModels) {
   distorted.camera.model = ProjectionModel::kWithDistortion;
   distorted.camera.kud = 0.031;
   distorted.camera.kdu = -0.0302;
+  // Each key image's features carry the map's model (the feature file keeps the pinhole part).
+  for (KeyImage& k : distorted.key_images) {
+    k.features.intrinsics.model = distorted.camera.model;
+    k.features.intrinsics.kud = distorted.camera.kud;
+    k.features.intrinsics.kdu = distorted.camera.kdu;
+  }
   save_map(distorted, with_dir);
   const VisualMemory back = load_map(with_dir);
   EXPECT_EQ(back.camera.model, ProjectionModel::kWithDistortion);
   EXPECT_DOUBLE_EQ(back.camera.kud, 0.031);
   EXPECT_DOUBLE_EQ(back.camera.kdu, -0.0302);
+  for (const KeyImage& k : back.key_images) {  // given back to every key image's features
+    EXPECT_EQ(k.features.intrinsics.model, ProjectionModel::kWithDistortion);
+    EXPECT_DOUBLE_EQ(k.features.intrinsics.kud, 0.031);
+    EXPECT_DOUBLE_EQ(k.features.intrinsics.kdu, -0.0302);
+  }
+  // A key image normalised through another model than the map's is not written.
+  VisualMemory mixed = distorted;
+  mixed.key_images[1].features.intrinsics.model = ProjectionModel::kWithoutDistortion;
+  try {
+    save_map(mixed, root_ / "mixed_models");
+    FAIL() << "a key image of another camera model written";
+  } catch (const MapError& e) {
+    EXPECT_EQ(e.kind(), MapError::Kind::kInvalidMap) << e.what();
+    EXPECT_NE(std::string(e.what()).find("key image 1"), std::string::npos) << e.what();
+  }
 
   LoadOptions same;
   same.expected_camera = distorted.camera;

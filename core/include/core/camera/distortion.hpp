@@ -10,8 +10,11 @@
 // a round trip is off by O(k^2 r^5) (~1e-4 normalised units at the corner of Pepper's image for
 // kud ~ 0.03).
 //
-// A building block for undistorting features (issue 31): the feature extractor still uses the
-// pinhole normalize(). Pure, thread-safe.
+// pixel_to_norm() is where every feature's pixel coordinates become normalised coordinates (the
+// extractor's line endpoints, ImageFeatures::corners_norm(), the matcher's point matches), so
+// teach, replay, replay-log and map build undistort the same way through the camera's model
+// (issue 31; docs/perception.md "Lens distortion"). For kWithoutDistortion it returns
+// normalize() itself, bit for bit. Pure, thread-safe.
 
 #include <opencv2/core/types.hpp>
 

@@ -11,8 +11,10 @@
 //                         undistorted -> distorted  u = cx + fx x (1 + kud r^2), r^2 = x^2 + y^2
 //                         distorted -> undistorted  x = (u - cx)/fx (1 + kdu r_d^2), r_d^2 from
 //                         the distorted normalised coordinates.
-// Pepper's top camera has kud ~ 0.03 (PEPPER.md); normalize()/denormalize() are the pinhole maps
-// and do not apply the distortion (the features are not undistorted yet, issue 31).
+// Pepper's top camera has kud ~ 0.03 (PEPPER.md). normalize()/denormalize() are the pinhole maps
+// and do not apply the distortion: features become normalised coordinates through
+// camera::pixel_to_norm() (core/camera/distortion.hpp), which applies the model, and nothing
+// that handles features calls normalize() directly.
 //
 // Invariant (checked by validate()): width_px, height_px > 0; fx_px, fy_px > 0 and finite;
 // cx_px, cy_px, kud, kdu finite; kud = kdu = 0 for kWithoutDistortion.
@@ -49,6 +51,12 @@ struct CameraIntrinsics {
   /// top camera (fx 298.13, fy 298.72, cx 159.15, cy 118.91; PEPPER.md) scaled to VGA with
   /// scaled_to(): fx 596.26, fy 597.44, cx 318.8, cy 238.32.
   static CameraIntrinsics pepper_top_vga();
+
+  /// The same camera's calibration with ViSP's distortion model (cameras/pepper_top.xml, model
+  /// perspectiveProjWithDistortion: QVGA fx 300.0232, fy 300.9510, cx 159.2219, cy 119.5549,
+  /// kud 0.0275116, kdu -0.0273748) scaled to VGA. Its focal lengths differ from
+  /// pepper_top_vga()'s because a pinhole fit of a lens absorbs part of the distortion.
+  static CameraIntrinsics pepper_top_vga_with_distortion();
 
   /// Same camera for another image size: focal lengths and principal point scale with the size
   /// (assumes the sensor is binned or scaled, not cropped, as ALVideoDevice does). Pixel centres

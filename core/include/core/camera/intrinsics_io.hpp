@@ -38,9 +38,9 @@ class IntrinsicsFileError : public std::runtime_error {
 /// Reads a ViSP camera XML file. `camera_name` empty: the first camera of the file. When
 /// `width_px`/`height_px` are > 0 the camera with that image size is selected (as ViSP does);
 /// when the file gives no image size and none is requested, IntrinsicsFileError. `model`: the
-/// projection model to read; std::nullopt takes the camera's perspectiveProjWithoutDistortion
-/// model when it has one (the pinhole the features use: they are not undistorted yet), else its
-/// perspectiveProjWithDistortion model. The result records the model read.
+/// projection model to read; std::nullopt takes the camera's perspectiveProjWithDistortion model
+/// when it has one (the features are undistorted through it, core/camera/distortion.hpp), else
+/// its perspectiveProjWithoutDistortion model. The result records the model read.
 CameraIntrinsics load_visp_camera_xml(const std::string& path, const std::string& camera_name = "",
                                       int width_px = 0, int height_px = 0,
                                       std::optional<ProjectionModel> model = std::nullopt);
