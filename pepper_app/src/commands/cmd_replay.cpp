@@ -31,6 +31,7 @@ struct ReplayArgs {
   std::string mock_lighting;  ///< empty: "replay" with --mock-start, else the robot's own
   bool wait_start = false;
   std::string mock_command_log;
+  std::string camera;  ///< --camera FILE: the calibration the map was taught with
 };
 
 /// Exit codes (docs/user_guide.md "Exit codes"): 0 the tour was completed, 1 the replay ended
@@ -79,6 +80,7 @@ int run_replay(const ReplayArgs& a) {
     ReplaySessionOptions o;
     // The map decides the camera size (an explicit conflicting --set is refused).
     o.camera = camera_request_for_map(a.common, config, map.camera);
+    o.camera_model = load_camera_option(a.camera);
     if (o.camera.width_px != config.robot.camera_width_px ||
         o.camera.height_px != config.robot.camera_height_px) {
       console.line("replay: camera " + std::to_string(o.camera.width_px) + "x" +
@@ -175,6 +177,10 @@ void register_replay_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--record", args->record, "Also record the replay's frames in this folder");
+  cmd->add_option("--camera", args->camera,
+                  "Calibration of the robot's camera, the file the map was taught with (`teach "
+                  "--camera`): checked against the map's camera, model included")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--json", args->json_out,
                   "Write per-frame command + telemetry as JSON lines (every frame; the "
                   "session's events, one per change, are --events)");

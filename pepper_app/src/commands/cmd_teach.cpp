@@ -30,6 +30,7 @@ struct TeachArgs {
   int64_t max_frames = 0;
   std::string mock_command_log;
   bool overwrite = false;
+  std::string camera;  ///< --camera FILE: the calibration to normalise features with
 };
 
 namespace fs = std::filesystem;
@@ -98,6 +99,7 @@ int run_teach(const TeachArgs& a) {
     o.recording_dir =
         a.recording.empty() ? free_recording_dir(a.map) : std::filesystem::path(a.recording);
     o.camera = camera_request(config);
+    o.camera_model = load_camera_option(a.camera);
     o.head = head_request(config, mode);
     o.teach = config.teach_options();
     o.feedback = teach_feedback_limits(config, o.min_key_features);
@@ -218,6 +220,12 @@ void register_teach_command(CLI::App& app) {
   cmd->add_flag("--scripted", args->scripted,
                 "Drive along the mock world's taught path (mock: robots; default there without --ui)");
   cmd->add_flag("--manual", args->manual, "Drive from the teach UI even on a mock: robot");
+  cmd->add_option("--camera", args->camera,
+                  "Calibration of the robot's camera (ViSP XML, e.g. cameras/pepper_top.xml with "
+                  "Pepper's lens distortion, or YAML): features are normalised through it instead "
+                  "of the pinhole intrinsics the robot reports; the map records it, and replay "
+                  "takes the same file")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--max-distance", args->max_distance_m, "End the tour after this many metres")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--max-frames", args->max_frames, "End the tour after this many frames")

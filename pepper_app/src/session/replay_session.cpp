@@ -188,8 +188,18 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                 {"head_yaw_rad", head.head_yaw_rad},
                 {"head_pitch_rad", head.head_pitch_rad},
                 {"max_error_rad", head.max_error_rad}});
-    const core::CameraIntrinsics camera = bridge.start_camera(options.camera);
+    const core::CameraIntrinsics reported = bridge.start_camera(options.camera);
+    const core::CameraIntrinsics camera =
+        options.camera_model
+            ? options.camera_model->scaled_to(reported.width_px, reported.height_px)
+            : reported;
     check_intrinsics(map.camera, camera);
+    if (options.camera_model && camera.model != map.camera.model) {
+      throw std::invalid_argument(
+          std::string("the camera file's projection model is ") + core::to_string(camera.model) +
+          ", the map was taught with " + core::to_string(map.camera.model) +
+          ": give replay the calibration the map was taught with");
+    }
     link.publish_state({{"connection",
                          {{"robot", "connected"},
                           {"head_locked", head.holding},

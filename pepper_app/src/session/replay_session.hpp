@@ -60,6 +60,11 @@ class ReplayMonitor {
 
 struct ReplaySessionOptions {
   naoqi_bridge::CameraRequest camera;
+  /// The calibration file's camera (`replay --camera`), scaled to the started camera's size, in
+  /// place of the intrinsics the bridge reports; it must match the map's camera, projection
+  /// model included. Unset: the bridge's pinhole intrinsics are checked against the map's, and
+  /// the navigator normalises with the map's camera.
+  std::optional<core::CameraIntrinsics> camera_model;
   naoqi_bridge::HeadLockRequest head;
   core::navigator::NavigatorOptions navigator;
   int frame_timeout_ms = 1000;       ///< no frame this long: stop and end ("frame_timeout")

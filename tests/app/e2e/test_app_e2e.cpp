@@ -381,6 +381,48 @@ TEST(AppE2E, TeachKeepsAnExistingMapAndReplayTakesTheMapsCameraSize) {
   EXPECT_EQ(vga.err().find("fix the value"), std::string::npos) << vga.both();
 }
 
+// `teach --camera FILE` normalises with the file's calibration (issue 31: Pepper's lens model on
+// a real robot, whose bridge reports the pinhole part only) and the map records its model;
+// `replay --camera` with a file of another model is refused, naming both; with the same file it
+// drives.
+TEST(AppE2E, TeachAndReplayTakeACameraCalibrationFile) {
+  const fs::path dir = fresh_dir("camera_file");
+  const std::string map = (dir / "map").string();
+  const std::string lens = std::string(PEPPER_SOURCE_DIR) + "/cameras/pepper_top.xml";
+  const std::string pinhole = std::string(PEPPER_SOURCE_DIR) + "/cameras/pepper_top_qvga.yaml";
+  test::AppProcess teach(test::cat({"teach", "--robot", "mock:" + kWorldFile, "--map", map,
+                                    "--max-distance", "0.5", "--camera", lens},
+                                   kQvga),
+                         dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+  const auto taught = core::memory::load_map(map);
+  EXPECT_EQ(taught.camera.model, core::ProjectionModel::kWithDistortion);
+  EXPECT_GT(taught.camera.kud, 0.0);
+  EXPECT_EQ(taught.camera.width_px, 320);
+
+  test::AppProcess other({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--camera",
+                          pinhole, "--max-frames", "5"},
+                         dir, "other");
+  EXPECT_EQ(other.wait(), 4) << other.both();
+  EXPECT_NE(other.err().find("perspectiveProjWithoutDistortion"), std::string::npos) << other.both();
+  EXPECT_NE(other.err().find("perspectiveProjWithDistortion"), std::string::npos) << other.both();
+
+  test::AppProcess same({"replay", "--robot", "mock:" + kWorldFile, "--map", map, "--camera", lens,
+                         "--max-frames", "10"},
+                        dir, "same");
+  EXPECT_EQ(same.wait(), 1) << same.both();  // 1: the frame limit ended it
+  EXPECT_NE(same.err().find("replay max_frames"), std::string::npos) << same.both();
+
+  test::AppProcess missing({"teach", "--robot", "mock:" + kWorldFile, "--map",
+                            (dir / "m2").string(), "--camera", (dir / "nope.xml").string()},
+                           dir, "missing");
+  // Refused by the option parser (docs/errors.md: its exit codes are above 100), nothing taught.
+  EXPECT_GT(missing.wait(), 100) << missing.both();
+  EXPECT_NE(missing.err().find("--camera: File does not exist"), std::string::npos)
+      << missing.both();
+  EXPECT_FALSE(fs::exists(dir / "m2"));
+}
+
 // The examples of every --help name files that exist in the checkout (issue 30: `map build
 // --help` used a camera file that existed nowhere). Shipped paths: worlds/, cameras/, tests/,
 // docs/ and ../shared/ (relative to the checkout). HelpExamples.* (test_help_examples_e2e.cpp)
