@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include "app/e2e/app_process.hpp"
@@ -79,7 +80,9 @@ TEST(CeilingTeachE2E, TeachesTheHallSavesMosaicAndRelayImagesAndRefusesDamage) {
 
   // The chained relay poses against the simulator's truth: the distance of each relay image from
   // the start (rotation-free: the mosaic frame is the first base frame, the truth the world's).
-  const TaughtPath truth = load_taught_path(map_dir);
+  const std::optional<TaughtPath> taught = load_taught_path(map_dir);
+  ASSERT_TRUE(taught.has_value()) << "a mock teach saves the true path";
+  const TaughtPath& truth = *taught;
   ASSERT_EQ(truth.key_images_m.size(), tour.relay_images.size());
   double last_from_start_m = 0.0;
   for (size_t i = 0; i < tour.relay_images.size(); ++i) {
