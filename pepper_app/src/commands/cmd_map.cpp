@@ -12,6 +12,7 @@
 #include "offline/map_tools.hpp"
 #include "offline/offline_jobs.hpp"
 #include "report/map_page.hpp"
+#include "session/ceiling_map.hpp"
 #include "session/taught_path.hpp"
 #include "session/teach_session.hpp"
 
@@ -72,9 +73,18 @@ int run_map_info(const MapInfoArgs& a) {
     const core::memory::MapSummary summary =
         a.full ? core::memory::summarize(core::memory::load_map(a.dir))
                : core::memory::read_map_info(a.dir);
-    std::cout << summary.to_text();
-    for (const auto& w : check_tour(summary, tour_check_options())) {
-      std::cout << "warning: " << w.text << "\n";
+    if (summary.mode == core::NavMode::kCeiling) {
+      // The mosaic and the tour are small: read and checked (checksums, agreement with the
+      // manifest) in both forms. The forward checks (weak key images, long gaps) do not apply:
+      // relay images are far apart by design and need no lines.
+      const CeilingParts parts = load_ceiling_parts(a.dir, summary);
+      std::cout << summary.to_text() << ceiling_summary_text(parts);
+      for (const auto& w : ceiling_warnings(parts.tour)) std::cout << "warning: " << w << "\n";
+    } else {
+      std::cout << summary.to_text();
+      for (const auto& w : check_tour(summary, tour_check_options())) {
+        std::cout << "warning: " << w.text << "\n";
+      }
     }
     if (a.full) std::cout << "all files present and checksums verified\n";
     return 0;
@@ -124,6 +134,13 @@ int run_map_trim(const MapTrimArgs& a) {
   try {
     // Refuse bad arguments before loading anything (the manifest gives the range).
     const core::memory::MapSummary info = core::memory::read_map_info(a.map);
+    if (info.mode == core::NavMode::kCeiling) {
+      // The cut would leave mosaic.json and ceiling_tour.json behind (ceiling_map.hpp).
+      return usage_error("trim", a.map +
+                                     " is a ceiling-mode map: map trim cuts forward maps "
+                                     "only (the relay chain and the mosaic would not follow "
+                                     "the cut); teach the part you want with --mode ceiling");
+    }
     const int to = a.to < 0 ? info.final_index : a.to;
     try {
       check_trim_range(a.from, to, info.final_index);

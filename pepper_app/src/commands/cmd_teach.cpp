@@ -89,8 +89,14 @@ int run_teach(const TeachArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
     const core::NavMode mode = parse_mode(a.common.mode);
-    refuse_unimplemented_mode(mode, "teach");
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
+    if (mode == core::NavMode::kCeiling && !robot.mock) {
+      // Refused (exit 2) before the old map is moved aside or anything connects.
+      throw ModeUnavailableError(
+          "teach --mode ceiling runs on mock: robots only for now: the ceiling's height above "
+          "the camera comes from the simulated world and is not configured or estimated on a "
+          "real robot yet (docs/method/ceiling.md)");
+    }
     if (a.scripted && a.manual) return report_error(
           "--scripted and --manual exclude each other: drop one (--scripted drives the mock "
           "world's path, --manual drives from the UI)");
@@ -102,6 +108,7 @@ int run_teach(const TeachArgs& a) {
     o.camera_model = load_camera_option(a.camera);
     o.head = head_request(config, mode);
     o.teach = config.teach_options();
+    o.mode = mode;
     o.feedback = teach_feedback_limits(config, o.min_key_features);
     o.config_json = config_to_json(config).dump();
     const bool ui_wanted = a.common.ui || a.common.ui_port >= 0;
@@ -170,7 +177,15 @@ int run_teach(const TeachArgs& a) {
     result << "teach " << r.outcome << ": " << r.frames_recorded << " frames recorded in "
            << o.recording_dir.string() << ", " << std::fixed << std::setprecision(2)
            << r.distance_m << std::defaultfloat << " m";
-    if (r.map_saved) {
+    if (r.map_saved && mode == core::NavMode::kCeiling) {
+      result << "; ceiling map with " << r.ceiling_landmarks << " landmarks, " << r.key_images
+             << " relay images";
+      if (std::isfinite(r.map_length_m)) {
+        result << " and " << std::fixed << std::setprecision(2) << r.map_length_m
+               << std::defaultfloat << " m";
+      }
+      result << " saved to " << (kept_old ? a.map + ".short" : a.map);
+    } else if (r.map_saved) {
       result << "; map with " << r.key_images << " key images";
       // NaN: a map without distances (no odometry and no commanded speeds recorded).
       if (std::isfinite(r.map_length_m)) {

@@ -3,11 +3,13 @@
 #include <iostream>
 
 #include "config/app_config.hpp"
+#include "core/ceiling/ceiling_tour.hpp"
+#include "core/ceiling/mosaic.hpp"
 #include "core/memory/visual_memory.hpp"
-#include "session/robot_connection.hpp"
 #include "naoqi_bridge/qi/errors.hpp"
 #include "session/console.hpp"
 #include "session/recording.hpp"
+#include "session/robot_connection.hpp"
 #include "session/session_cli.hpp"
 #include "sim/world.hpp"
 
@@ -26,6 +28,12 @@ std::string next_step_for(const std::exception& e) {
     return "give a map folder written by `pepper_app teach` or `pepper_app map build` "
            "(`pepper_app map info DIR` checks one); a damaged map can be rebuilt from its "
            "recording with `pepper_app map build`";
+  }
+  if (dynamic_cast<const core::ceiling::MosaicError*>(&e) != nullptr ||
+      dynamic_cast<const core::ceiling::CeilingTourError*>(&e) != nullptr) {
+    // `map build` rebuilds forward maps only: a ceiling map comes from a ceiling teach.
+    return "the ceiling-mode map is damaged: teach it again with `pepper_app teach --mode "
+           "ceiling`";
   }
   if (dynamic_cast<const sim::WorldError*>(&e) != nullptr) {
     return "give a world file that exists and parses, e.g. worlds/robotics_room.yaml "

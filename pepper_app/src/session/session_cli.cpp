@@ -37,7 +37,8 @@ void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool wit
 void add_mode_option(CLI::App* cmd, std::string& mode) {
   cmd->add_option("--mode", mode,
                   "What the robot navigates by: forward (the camera looking ahead) or ceiling "
-                  "(the camera looking up; not implemented yet: refused, docs/method/ceiling.md)")
+                  "(the camera looking up, docs/method/ceiling.md; teach only for now: "
+                  "replay, demo and evaluate refuse it)")
       ->check(CLI::IsMember({"forward", "ceiling"}))
       ->capture_default_str();
 }
@@ -50,14 +51,14 @@ core::NavMode parse_mode(const std::string& text) {
 
 void refuse_unimplemented_mode(core::NavMode mode, const std::string& command) {
   if (mode == core::NavMode::kForward) return;
-  // Never pretend: without the mosaic there is nothing to teach or to localise against.
+  // Never pretend: nothing localises against the mosaic or drives by it in a session yet.
   throw ModeUnavailableError(
       command +
-      " --mode ceiling: ceiling mode cannot teach or replay yet. What exists: the "
-      "canonical ceiling view (the homography from the pitched-up camera to a camera looking "
-      "straight up, core/ceiling/canonical_view.hpp), the mode recorded in maps and the ceiling "
-      "head pitch (robot.ceiling_head_pitch_rad). Missing (issue 24): ceiling landmarks, the "
-      "mosaic, localisation against it, relay images and the drive between them; see "
+      " --mode ceiling: ceiling mode can teach (teach --mode ceiling on a mock: robot builds the "
+      "mosaic of ceiling landmarks and picks the relay images) but cannot replay yet. What "
+      "exists: the canonical ceiling view, the mosaic, localisation against it and the relay "
+      "images (core/ceiling/). Missing (issue 24): the replay session (localising against the "
+      "mosaic and driving from relay image to relay image) and its evaluation; see "
       "docs/method/ceiling.md. Use --mode forward (the default).");
 }
 

@@ -93,7 +93,8 @@ void add_mode_option(CLI::App* cmd, std::string& mode);
 /// The mode of a --mode value; throws ConfigError listing the modes for any other text.
 core::NavMode parse_mode(const std::string& text);
 
-/// Issue 24 is not done: teach, replay, demo and evaluate drive only in forward mode. Throws
+/// Issue 24 is not done: ceiling mode teaches (mock robots) but replay, demo and evaluate drive
+/// only in forward mode. Throws
 /// ModeUnavailableError (exit 2, nothing moved) for ceiling mode, saying what exists of it and what
 /// is missing; returns for forward mode. `command` names the command in the message.
 void refuse_unimplemented_mode(core::NavMode mode, const std::string& command);

@@ -10,11 +10,12 @@
 
 #include "core/mapping/drive_odometer.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "session/ceiling_map.hpp"
 #include "session/console.hpp"
 #include "session/recording.hpp"
+#include "session/robot_supervision.hpp"
 #include "session/signals.hpp"
 #include "session/taught_path.hpp"
-#include "session/robot_supervision.hpp"
 #include "session/telemetry_json.hpp"
 #include "sim/teach_driver.hpp"
 
@@ -109,10 +110,24 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
   if (options.scripted && !robot.mock) {
     throw std::invalid_argument("teach: --scripted needs a mock: robot (it drives on ground truth)");
   }
+  const bool ceiling_mode = options.mode == core::NavMode::kCeiling;
+  if (ceiling_mode && !robot.mock) {
+    throw std::invalid_argument(
+        "teach --mode ceiling runs on mock: robots only for now: the ceiling's height above the "
+        "camera is taken from the simulated world, and is not configured or estimated on a real "
+        "robot yet (docs/method/ceiling.md)");
+  }
   nb::RobotBridge& bridge = *robot.bridge;
   TeachResult result;
   std::optional<RecordingWriter> writer;
+  // One of the two runs: the forward key-image selector, or the ceiling mosaic builder.
   std::optional<core::mapping::Teacher> teacher;
+  std::optional<CeilingTeacher> ceiling_teacher;
+  auto frames_taught = [&]() -> int64_t {
+    if (ceiling_teacher) return ceiling_teacher->frames_seen();
+    return teacher ? teacher->frames_seen() : 0;
+  };
+  bool ceiling_lost = false;  // the builder found no pose for the last frame
   TeachFeedbackLimits feedback_limits;
   TeachFeedback feedback;
   nlohmann::json feedback_sent = to_json(feedback);
@@ -179,7 +194,13 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     if (!options.recording_dir.empty()) {
       writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json);
     }
-    teacher.emplace(camera, options.teach);
+    if (ceiling_mode) {
+      ceiling_teacher.emplace(
+          ceiling_camera_of_mock(*robot.mock, camera, options.head.head_pitch_rad), camera,
+          options.teach.extractor, options.ceiling);
+    } else {
+      teacher.emplace(camera, options.teach);
+    }
     feedback_limits = options.feedback;
     feedback_limits.half_view_rad = std::atan(0.5 * camera.width_px / camera.fx_px);
     link.event({{"event", "teach_started"},
@@ -303,6 +324,34 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       if (recording) {
         if (writer) writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
         ++result.frames_recorded;
+      }
+      if (recording && ceiling_teacher) {
+        const core::ceiling::MosaicFrameResult step =
+            ceiling_teacher->add_frame(*frame, travelled_m);
+        if (pos) result.path_m.push_back(*pos);
+        // The builder does not re-localise (mosaic_builder.hpp): say so when the ceiling is lost,
+        // once per loss, so that the operator can drive back while the teach is still running.
+        if (!step.localised && !ceiling_lost) {
+          link.event({{"event", "ceiling_lost"},
+                      {"frame", ceiling_teacher->frames_seen() - 1},
+                      {"matches", step.matches},
+                      {"inliers", step.inliers}});
+          if (link.has_ui()) {
+            link.publish_state({{"stop_reason",
+                                 "ceiling lost: no pose in the mosaic; drive back to where the "
+                                 "ceiling was last seen"}});
+          }
+        } else if (step.localised && ceiling_lost && link.has_ui()) {
+          link.publish_state({{"stop_reason", nullptr}});
+        }
+        ceiling_lost = !step.localised;
+        link.publish_samples({{"t_s", (frame->t_ns - t0_ns) * 1e-9},
+                              {"distance_m", result.distance_m},
+                              {"v_m_s", sent.v_x_m_s},
+                              {"omega_rad_s", sent.omega_rad_s},
+                              {"ceiling_inliers", step.inliers},
+                              {"ceiling_added", step.added}});
+      } else if (recording) {
         const core::mapping::TeachStep step = teacher->add_frame(*frame, travelled_m);
         if (pos) result.path_m.push_back(*pos);
         // The first frame is always key image 0 (the teacher does not report it as a new one).
@@ -358,20 +407,25 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       if (link.console() != nullptr) {
         Progress p;
         p.phase = "teach";
-        p.frames = teacher->frames_seen();
-        p.key_index = teacher->key_image_count() - 1;
+        p.frames = frames_taught();
         p.distance_m = result.distance_m;
+        if (teacher) p.key_index = teacher->key_image_count() - 1;
+        if (ceiling_teacher) {
+          p.detail = "ceiling mosaic, " + std::to_string(ceiling_teacher->unlocalised_frames()) +
+                     " frames without a pose" + (ceiling_lost ? ", CEILING LOST" : "");
+        }
         if (!recording) p.detail = "not recording";
         link.progress(p);
       }
       nlohmann::json overlay = nlohmann::json::object();
-      if (recording && link.has_ui()) {  // the teacher has just extracted this frame's features
+      if (recording && teacher && link.has_ui()) {  // the teacher has just extracted them
         overlay = overlay_to_json(
             core::features::detected_overlay(teacher->last_frame_features()), "detected");
       }
       overlay["text"] = nlohmann::json::array(
           {std::string(recording ? "REC " : "") + "frame " + std::to_string(frame->index) +
-           ", key images " + std::to_string(teacher->key_image_count())});
+           (teacher ? ", key images " + std::to_string(teacher->key_image_count())
+                    : std::string(", ceiling mosaic") + (ceiling_lost ? " (lost)" : ""))});
       link.publish_frame(*frame, overlay);
 
       // Command for the next frame period.
@@ -385,7 +439,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         cmd = drive;
       }
       if (options.max_distance_m > 0 && result.distance_m >= options.max_distance_m) finish = true;
-      if (options.max_frames > 0 && teacher->frames_seen() >= options.max_frames) finish = true;
+      if (options.max_frames > 0 && frames_taught() >= options.max_frames) finish = true;
       if (finish) break;
       const bool want_move = cmd.v_x_m_s != 0.0 || cmd.omega_rad_s != 0.0;
       if (want_move) {
@@ -441,9 +495,51 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                               " odometry steps faster than the robot can drive were ignored "
                               "(odometry reset?) and measured by the commanded speed instead");
   }
-  if (teacher) result.frames_seen = teacher->frames_seen();
+  result.frames_seen = frames_taught();
   // Save what can be saved: the recording is already on disk; now the map.
-  if (teacher && teacher->frames_seen() >= 2) {
+  if (ceiling_teacher && ceiling_teacher->frames_seen() >= 2) {
+    try {
+      const CeilingMap cm = ceiling_teacher->finish(options.config_json);
+      save_ceiling_map(cm, options.map_dir);
+      result.map_saved = true;
+      result.key_images = static_cast<int>(cm.map.key_images.size());
+      result.ceiling_landmarks = static_cast<int64_t>(cm.mosaic.landmarks.size());
+      result.ceiling_unlocalised_frames = cm.tour.unlocalised_frames;
+      result.map_length_m =
+          cm.map.key_images.back().travelled_m - cm.map.key_images.front().travelled_m;
+      for (const auto& w : ceiling_warnings(cm.tour)) result.warnings.push_back(w);
+      if (robot.mock && !result.path_m.empty()) {
+        // path_m has one position per taught frame, as the relay images' frame indices count.
+        for (const auto& r : cm.tour.relay_images) {
+          result.key_m.push_back(result.path_m.at(static_cast<size_t>(r.frame)));
+        }
+        try {
+          save_taught_path(options.map_dir,
+                           {robot.mock->world().name, result.path_m, result.key_m});
+        } catch (const std::exception& e) {
+          result.warnings.push_back(std::string("taught path not saved (top view only): ") +
+                                    e.what());
+        }
+      }
+      link.publish_state({{"map_summary",
+                           {{"mode", "ceiling"},
+                            {"key_images", result.key_images},
+                            {"length_m", result.map_length_m},
+                            {"landmarks", result.ceiling_landmarks},
+                            {"path", options.map_dir.string()}}},
+                          {"warnings", result.warnings}});
+      link.event({{"event", "map_saved"},
+                  {"path", options.map_dir.string()},
+                  {"mode", "ceiling"},
+                  {"key_images", result.key_images},
+                  {"landmarks", result.ceiling_landmarks},
+                  {"relay_breaks", cm.tour.breaks},
+                  {"unlocalised_frames", cm.tour.unlocalised_frames}});
+    } catch (const std::exception& e) {
+      result.warnings.push_back(std::string("map not saved: ") + e.what() +
+                                " (the recording keeps the frames)");
+    }
+  } else if (teacher && teacher->frames_seen() >= 2) {
     try {
       core::memory::VisualMemory map = teacher->finish(options.config_json);
       core::memory::save_map(map, options.map_dir);

@@ -11,12 +11,20 @@
 // and corners while recording, and live warnings (teach_feedback.hpp) when the view is too poor
 // or the turn too fast for the replay.
 //
+// Ceiling mode (mode = kCeiling, issue 24): the head is locked at the ceiling pitch (the caller's
+// `head`), and where the forward teacher runs, a CeilingTeacher (ceiling_teach.hpp) builds the
+// mosaic from the canonical ceiling view of every taught frame; at the end the relay images are
+// chosen and the map (mode ceiling, key images = relay images), the mosaic and the ceiling tour
+// are saved (ceiling_map.hpp). Mock robots only for now (the ceiling height comes from the
+// simulated world). The forward-view live warnings and overlay are not shown in ceiling mode.
+//
 // Safety: every way out (finish, Ctrl-C flag, exception, lost connection, stalled frames) sends
 // bridge.stop() FIRST; then the recording is kept (it can become a map with `map build`); then
 // the map is saved if the teacher saw at least 2 frames. Stalled frames (none for
 // frame_timeout_ms) stop the base; teach then keeps waiting (the operator may resume).
 // Threads: none of its own. Errors are reported in TeachResult (never thrown) after the stop.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <exception>
 #include <filesystem>
@@ -24,10 +32,10 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "core/mapping/teacher.hpp"
+#include "core/nav_mode.hpp"
 #include "naoqi_bridge/robot_bridge.hpp"
+#include "session/ceiling_teach.hpp"
 #include "session/robot_connection.hpp"
 #include "session/session_link.hpp"
 #include "session/teach_feedback.hpp"
@@ -46,6 +54,8 @@ struct TeachSessionOptions {
   std::optional<core::CameraIntrinsics> camera_model;
   naoqi_bridge::HeadLockRequest head;
   core::mapping::TeachOptions teach;
+  core::NavMode mode = core::NavMode::kForward;  ///< kCeiling: mock: robots only (see above)
+  CeilingTeachOptions ceiling;                   ///< ceiling mode's mosaic and relay images
   std::string config_json = "{}";       ///< effective configuration, stored in map + recording
   bool scripted = false;                ///< drive with the mock world's TeachDriver (mock: only)
   double max_distance_m = 0.0;          ///< > 0: end the tour after this much driving
@@ -69,7 +79,11 @@ struct TeachResult {
   std::exception_ptr error_exception;  ///< the exception behind `error` (its type gives advice)
   int64_t frames_recorded = 0;  ///< frames taught (and written, when recording)
   int64_t frames_seen = 0;
-  int key_images = 0;
+  int key_images = 0;  ///< ceiling mode: the relay images
+  /// Ceiling mode: the mosaic's landmarks, the frames without a pose, and the tour's warnings
+  /// (also in `warnings`).
+  int64_t ceiling_landmarks = 0;
+  int64_t ceiling_unlocalised_frames = 0;
   bool map_saved = false;
   double distance_m = 0.0;  ///< driven (ground truth on the mock, else the map's measure)
   /// The saved map's driven length (last key image's travelled_m minus the first's, as

@@ -1,5 +1,6 @@
 // --mode forward|ceiling (issue 24): the head lock follows the mode, ceiling mode is refused by
-// the commands with a message saying what exists, and the ceiling pitch is range-checked.
+// replay, demo and evaluate with a message saying teach works and what exists, and the ceiling
+// pitch is range-checked.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -39,9 +40,10 @@ TEST(SessionMode, ModesParseAndCeilingIsRefusedSayingWhatExists) {
     refuse_unimplemented_mode(core::NavMode::kCeiling, "replay");
     FAIL() << "ceiling mode was not refused";
   } catch (const ModeUnavailableError& e) {
-    EXPECT_THAT(e.what(), AllOf(HasSubstr("replay --mode ceiling"),
-                                HasSubstr("canonical ceiling view"), HasSubstr("mosaic"),
-                                HasSubstr("docs/method/ceiling.md"), HasSubstr("--mode forward")));
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("replay --mode ceiling"), HasSubstr("can teach"),
+                                HasSubstr("cannot replay yet"), HasSubstr("canonical ceiling view"),
+                                HasSubstr("mosaic"), HasSubstr("docs/method/ceiling.md"),
+                                HasSubstr("--mode forward")));
   }
 }
 

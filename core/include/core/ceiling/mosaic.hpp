@@ -1,8 +1,8 @@
 #pragma once
 // The ceiling mosaic's data (issue 24; Blanc et al. 2004): the 2D landmarks lying on the ceiling
 // plane, each with its planar pose in the mosaic frame and its descriptor, and the file that
-// holds them. MosaicBuilder (mosaic_builder.hpp) builds one from teach frames; teach does not run
-// in ceiling mode yet and maps do not reference the file (docs/method/ceiling.md).
+// holds them. MosaicBuilder (mosaic_builder.hpp) builds one from teach frames; `teach --mode
+// ceiling` saves it as MAP/mosaic.json (docs/method/ceiling.md, map_format.md).
 //
 // Frame and units: the mosaic frame is the robot's base frame at the first teach frame, projected
 // on the ceiling plane: x forward, y left, metres, angles in radians counter-clockwise seen from

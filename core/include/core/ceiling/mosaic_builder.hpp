@@ -27,7 +27,8 @@
 // consensus (too few inliers) is reported as not localised and adds nothing; the next frame is
 // matched with the last good pose. There is no global re-localisation during teach: a teach that
 // loses the ceiling while the base moves farther than search_radius_m stays lost (every later
-// frame reports localised = false); the session (to come) must stop or warn.
+// frame reports localised = false); the teach session warns (a ceiling_lost event, the UI status,
+// map info's warning) and does not recover.
 // Errors: bad options throw std::invalid_argument naming the field. Not thread-safe (one teach).
 
 #include <cstdint>

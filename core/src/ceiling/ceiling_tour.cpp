@@ -1,0 +1,163 @@
+// The ceiling tour's file (see ceiling_tour.hpp).
+#include "core/ceiling/ceiling_tour.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "memory/detail/binary_io.hpp"
+#include "memory/detail/file_io.hpp"
+
+namespace pepper::core::ceiling {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kFormatName = "pepper-ceiling-tour";
+
+// CRC over the canonical dump (nlohmann's objects are key-sorted) without the "crc32" field.
+uint32_t body_crc(json j) {
+  j.erase("crc32");
+  return memory::detail::crc32(j.dump());
+}
+
+[[noreturn]] void io_error(const fs::path& path, const std::string& what) {
+  throw CeilingTourError(path, what + " (" + std::strerror(errno) + ")");
+}
+
+bool finite(const PlanarPose& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
+}
+
+}  // namespace
+
+CeilingTourError::CeilingTourError(fs::path path, const std::string& what)
+    : std::runtime_error(path.string() + ": " + what), path_(std::move(path)) {}
+
+std::vector<std::string> CeilingTour::validate() const {
+  std::vector<std::string> e;
+  if (frames < 2) e.push_back("frames " + std::to_string(frames) + " must be >= 2");
+  if (unlocalised_frames < 0 || unlocalised_frames > frames)
+    e.push_back("unlocalised_frames " + std::to_string(unlocalised_frames) +
+                " must be in [0, frames]");
+  if (relay_images.size() < 2)
+    e.push_back("relay_images: " + std::to_string(relay_images.size()) + ", at least 2 needed");
+  for (size_t i = 0; i < relay_images.size(); ++i) {
+    const RelayImageRecord& r = relay_images[i];
+    const std::string where = "relay image " + std::to_string(i) + ": ";
+    if (r.frame < 0 || r.frame >= frames)
+      e.push_back(where + "frame " + std::to_string(r.frame) + " outside the tour's frames");
+    if (i > 0 && r.frame <= relay_images[i - 1].frame) e.push_back(where + "frames must increase");
+    if (!finite(r.T_mosaic_base)) e.push_back(where + "pose must be finite");
+    for (const int64_t id : r.landmark_ids)
+      if (id < 0) e.push_back(where + "landmark id " + std::to_string(id) + " must be >= 0");
+  }
+  for (const int64_t b : breaks)
+    if (b < 0 || b + 1 >= static_cast<int64_t>(relay_images.size()))
+      e.push_back("break " + std::to_string(b) + " names no pair of relay images");
+  if (odometry_disagreement_m && !(*odometry_disagreement_m >= 0.0))
+    e.push_back("odometry_disagreement_m must be >= 0");
+  if (!(driven_m >= 0.0)) e.push_back("driven_m must be >= 0");
+  return e;
+}
+
+void save_ceiling_tour(const CeilingTour& tour, const fs::path& file) {
+  const auto errors = tour.validate();
+  if (!errors.empty()) throw CeilingTourError(file, "invalid tour, not saved: " + errors.front());
+  json relays = json::array();
+  for (const RelayImageRecord& r : tour.relay_images) {
+    relays.push_back({{"frame", r.frame},
+                      {"x_m", r.T_mosaic_base.x_m},
+                      {"y_m", r.T_mosaic_base.y_m},
+                      {"theta_rad", r.T_mosaic_base.theta_rad},
+                      {"landmark_ids", r.landmark_ids}});
+  }
+  json j = {{"format", kFormatName},
+            {"format_version", kCeilingTourFormatVersion},
+            {"frames", tour.frames},
+            {"unlocalised_frames", tour.unlocalised_frames},
+            {"relay_images", relays},
+            {"breaks", tour.breaks},
+            {"odometry_disagreement_m",
+             tour.odometry_disagreement_m ? json(*tour.odometry_disagreement_m) : json(nullptr)},
+            {"driven_m", tour.driven_m}};
+  j["crc32"] = body_crc(j);
+  const std::string text = j.dump(1) + "\n";
+
+  // Atomic, as the mosaic: a sibling temporary file, synced, renamed, the folder synced.
+  const fs::path dir = file.parent_path().empty() ? fs::path(".") : file.parent_path();
+  const fs::path tmp = dir / (file.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  memory::detail::write_file_synced(
+      tmp, reinterpret_cast<const uint8_t*>(text.data()), text.size(),
+      [&](const fs::path& path, const std::string& what) {
+        const int cause = errno;  // io_error reports it; the clean-up must not replace it
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        errno = cause;
+        io_error(path, what);
+      });
+  if (::rename(tmp.c_str(), file.c_str()) != 0) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    io_error(file, "cannot rename the new tour file into place");
+  }
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+CeilingTour load_ceiling_tour(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw CeilingTourError(file, "missing or unreadable");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::exception& e) {
+    throw CeilingTourError(file, std::string("not valid JSON (truncated or corrupt): ") + e.what());
+  }
+  CeilingTour t;
+  try {
+    if (!j.is_object() || j.value("format", std::string()) != kFormatName)
+      throw CeilingTourError(
+          file, std::string("not a ceiling tour file (format != ") + kFormatName + ")");
+    const int version = j.at("format_version").get<int>();
+    if (version != kCeilingTourFormatVersion)
+      throw CeilingTourError(file, "ceiling tour format version " + std::to_string(version) +
+                                       ", this build reads version " +
+                                       std::to_string(kCeilingTourFormatVersion));
+    if (j.at("crc32").get<uint32_t>() != body_crc(j))
+      throw CeilingTourError(file, "CRC-32 mismatch (edited or corrupt)");
+    t.frames = j.at("frames").get<int64_t>();
+    t.unlocalised_frames = j.at("unlocalised_frames").get<int64_t>();
+    for (const json& r : j.at("relay_images")) {
+      RelayImageRecord rec;
+      rec.frame = r.at("frame").get<int64_t>();
+      rec.T_mosaic_base = {r.at("x_m").get<double>(), r.at("y_m").get<double>(),
+                           r.at("theta_rad").get<double>()};
+      rec.landmark_ids = r.at("landmark_ids").get<std::vector<int64_t>>();
+      t.relay_images.push_back(std::move(rec));
+    }
+    t.breaks = j.at("breaks").get<std::vector<int64_t>>();
+    const json& d = j.at("odometry_disagreement_m");
+    if (!d.is_null()) t.odometry_disagreement_m = d.get<double>();
+    t.driven_m = j.at("driven_m").get<double>();
+  } catch (const json::exception& e) {
+    throw CeilingTourError(file, std::string("missing or mistyped field: ") + e.what());
+  }
+  const auto errors = t.validate();
+  if (!errors.empty()) throw CeilingTourError(file, errors.front());
+  return t;
+}
+
+}  // namespace pepper::core::ceiling

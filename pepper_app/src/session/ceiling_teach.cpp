@@ -1,0 +1,125 @@
+#include "session/ceiling_teach.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/ceiling/landmarks.hpp"
+#include "core/ceiling/observation.hpp"
+
+namespace pepper::app {
+
+namespace cc = core::ceiling;
+
+CeilingCameraSetup ceiling_camera_of_mock(const sim::MockRobot& robot,
+                                          const core::CameraIntrinsics& camera,
+                                          double head_pitch_rad) {
+  const Eigen::Isometry3d T_base_cam = robot.options().mount.T_base_cam(0.0, head_pitch_rad);
+  CeilingCameraSetup s;
+  s.camera.intrinsics = camera;
+  s.camera.head_pitch_rad = head_pitch_rad;
+  s.camera.ceiling_above_cam_m = robot.world().ceiling_height_m - T_base_cam.translation().z();
+  if (!(s.camera.ceiling_above_cam_m > 0.0)) {
+    throw std::invalid_argument("ceiling mode: the world's ceiling (" +
+                                std::to_string(robot.world().ceiling_height_m) +
+                                " m) is not above the camera");
+  }
+  s.cam_in_base_m = {T_base_cam.translation().x(), T_base_cam.translation().y()};
+  return s;
+}
+
+namespace {
+
+cc::MosaicBuilderOptions builder_options(const CeilingTeachOptions& o) {
+  cc::MosaicBuilderOptions b = o.builder;
+  b.px_per_m = o.px_per_m;
+  return b;
+}
+
+}  // namespace
+
+CeilingTeacher::CeilingTeacher(const CeilingCameraSetup& setup,
+                               const core::CameraIntrinsics& camera,
+                               const core::features::FeatureExtractorOptions& extractor,
+                               CeilingTeachOptions options)
+    : setup_(setup),
+      camera_(camera),
+      extractor_(camera, extractor),
+      options_(options),
+      view_(std::make_unique<cc::CanonicalView>(
+          setup.camera, cc::fit_frame(setup.camera, options.px_per_m, options.max_forward_m))),
+      builder_(builder_options(options)) {
+  options_.relay.check();
+}
+
+cc::MosaicFrameResult CeilingTeacher::add_frame(const core::Frame& frame, double travelled_m) {
+  cv::Mat seen;
+  const cv::Mat canonical = view_->warp(frame.gray, &seen);
+  const cc::CeilingObservation obs =
+      cc::observe(*view_, setup_.cam_in_base_m, cc::extract_landmarks(canonical, seen));
+  cc::MosaicFrameResult r = builder_.add_frame(obs);
+  if (!r.localised) ++unlocalised_;
+  // Cloned: the relay images are chosen at the end, and a bridge may reuse its buffers.
+  frames_.push_back({frame.gray.clone(), frame.t_ns, travelled_m, frame.odom});
+  return r;
+}
+
+CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
+  if (frames_.size() < 2) {
+    throw std::runtime_error("ceiling teach: " + std::to_string(frames_.size()) +
+                             " frame(s) taught, at least 2 needed");
+  }
+  CeilingMap out;
+  out.mosaic = builder_.mosaic();
+  if (out.mosaic.landmarks.empty()) {
+    throw std::runtime_error(
+        "ceiling teach: the mosaic kept no landmark (no ceiling texture seen with the head at " +
+        std::to_string(setup_.camera.head_pitch_rad) + " rad?)");
+  }
+  const auto sightings = builder_.kept_sightings();
+  const cc::RelaySelection relays = cc::select_relay_images(sightings, options_.relay);
+  const auto& results = builder_.frames();
+
+  out.map.mode = core::NavMode::kCeiling;
+  out.map.camera = camera_;
+  out.map.parameters_json = parameters_json;
+  for (const size_t f : relays.relay_frames) {
+    const Kept& k = frames_.at(f);
+    core::memory::KeyImage key;
+    key.source_frame_index = static_cast<int64_t>(f);
+    key.t_ns = k.t_ns;
+    key.travelled_m = k.travelled_m;
+    key.odom = k.odom;
+    key.features = extractor_.extract(k.gray, core::features::kPartsAll);
+    out.map.key_images.push_back(std::move(key));
+
+    cc::RelayImageRecord rec;
+    rec.frame = static_cast<int64_t>(f);
+    rec.T_mosaic_base = results.at(f).T_mosaic_base;
+    for (const auto& s : sightings.at(f)) rec.landmark_ids.push_back(s.id);
+    out.tour.relay_images.push_back(std::move(rec));
+  }
+  out.tour.frames = static_cast<int64_t>(frames_.size());
+  out.tour.unlocalised_frames = unlocalised_;
+  for (const size_t b : relays.breaks) out.tour.breaks.push_back(static_cast<int64_t>(b));
+  const double first_m = frames_.front().travelled_m, last_m = frames_.back().travelled_m;
+  out.tour.driven_m = std::isfinite(first_m) && std::isfinite(last_m) ? last_m - first_m : 0.0;
+
+  // Drift indicator: the chained pose against the odometry (both from the first frame) at the
+  // last localised frame. Neither is the truth: a large gap says one of them drifted.
+  for (size_t i = results.size(); i-- > 0;) {
+    if (!results[i].localised) continue;
+    const auto& o0 = frames_.front().odom;
+    const auto& oi = frames_[i].odom;
+    if (o0 && oi) {
+      const cc::PlanarPose T_odom_0{o0->x_m, o0->y_m, o0->yaw_rad};
+      const cc::PlanarPose T_odom_i{oi->x_m, oi->y_m, oi->yaw_rad};
+      const cc::PlanarPose T_0_i = T_odom_0.inverse() * T_odom_i;
+      out.tour.odometry_disagreement_m = std::hypot(T_0_i.x_m - results[i].T_mosaic_base.x_m,
+                                                    T_0_i.y_m - results[i].T_mosaic_base.y_m);
+    }
+    break;
+  }
+  return out;
+}
+
+}  // namespace pepper::app

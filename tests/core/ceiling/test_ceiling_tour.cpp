@@ -1,0 +1,147 @@
+// The ceiling tour's file (ceiling_tour.hpp): an exact round trip (with and without the odometry
+// figure), and corruption refused with the file named: missing, truncated, a changed number (CRC),
+// another format or version, an edited field with the CRC patched to agree; invalid tours are not
+// written.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/ceiling/ceiling_tour.hpp"
+#include "support/temp_dir.hpp"
+
+namespace pepper::core::ceiling {
+namespace {
+namespace fs = std::filesystem;
+
+uint32_t crc32(const std::string& b) {  // independent of the library's (IEEE, reflected)
+  uint32_t c = 0xFFFFFFFFu;
+  for (char ch : b) {
+    c ^= static_cast<uint8_t>(ch);
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+  }
+  return c ^ 0xFFFFFFFFu;
+}
+
+CeilingTour sample() {
+  CeilingTour t;
+  t.frames = 40;
+  t.unlocalised_frames = 2;
+  t.relay_images = {{0, {0.0, 0.0, 0.0}, {1, 2, 3, 5}},
+                    {17, {1.25, -0.031, 0.0123}, {3, 5, 8}},
+                    {39, {2.5, 0.4, 0.61}, {8, 13}}};
+  t.breaks = {1};
+  t.odometry_disagreement_m = 0.0421;
+  t.driven_m = 2.61;
+  return t;
+}
+
+std::string read(const fs::path& f) {
+  std::ifstream in(f, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void write(const fs::path& f, const std::string& s) {
+  std::ofstream(f, std::ios::binary | std::ios::trunc) << s;
+}
+
+void expect_refused(const fs::path& file, const std::string& what) {
+  try {
+    load_ceiling_tour(file);
+    ADD_FAILURE() << "loaded: " << what;
+  } catch (const CeilingTourError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(file.string() + ": ", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    EXPECT_EQ(e.path(), file);
+  }
+}
+
+TEST(CeilingTourFile, RoundTripIsExact) {
+  test::TempDir dir("ceiling_tour");
+  const fs::path f = dir.path() / "ceiling_tour.json";
+  for (const bool with_odometry : {true, false}) {
+    CeilingTour t = sample();
+    if (!with_odometry) t.odometry_disagreement_m.reset();
+    save_ceiling_tour(t, f);
+    const CeilingTour back = load_ceiling_tour(f);
+    EXPECT_EQ(back.frames, t.frames);
+    EXPECT_EQ(back.unlocalised_frames, t.unlocalised_frames);
+    ASSERT_EQ(back.relay_images.size(), t.relay_images.size());
+    for (size_t i = 0; i < t.relay_images.size(); ++i) {
+      EXPECT_EQ(back.relay_images[i].frame, t.relay_images[i].frame);
+      EXPECT_EQ(back.relay_images[i].T_mosaic_base.x_m, t.relay_images[i].T_mosaic_base.x_m);
+      EXPECT_EQ(back.relay_images[i].T_mosaic_base.y_m, t.relay_images[i].T_mosaic_base.y_m);
+      EXPECT_EQ(back.relay_images[i].T_mosaic_base.theta_rad,
+                t.relay_images[i].T_mosaic_base.theta_rad);
+      EXPECT_EQ(back.relay_images[i].landmark_ids, t.relay_images[i].landmark_ids);
+    }
+    EXPECT_EQ(back.breaks, t.breaks);
+    EXPECT_EQ(back.odometry_disagreement_m, t.odometry_disagreement_m);
+    EXPECT_EQ(back.driven_m, t.driven_m);
+  }
+  // No temporary file left beside it.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
+}
+
+TEST(CeilingTourFile, CorruptionIsRefusedNamingTheFile) {
+  test::TempDir dir("ceiling_tour");
+  const fs::path f = dir.path() / "ceiling_tour.json";
+  expect_refused(f, "missing");
+  save_ceiling_tour(sample(), f);
+  const std::string good = read(f);
+
+  write(f, good.substr(0, good.size() / 2));
+  expect_refused(f, "not valid JSON");
+
+  std::string changed = good;
+  const size_t at = changed.find("2.61");
+  ASSERT_NE(at, std::string::npos);
+  changed.replace(at, 4, "2.62");
+  write(f, changed);
+  expect_refused(f, "CRC-32 mismatch");
+
+  // Edited fields with the CRC patched to agree: the validation names the field.
+  auto patched = [&](const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json j = nlohmann::json::parse(good);
+    edit(j);
+    j.erase("crc32");
+    j["crc32"] = crc32(j.dump());
+    write(f, j.dump());
+  };
+  patched([](nlohmann::json& j) { j["format_version"] = 2; });
+  expect_refused(f, "format version 2");
+  patched([](nlohmann::json& j) { j["format"] = "pepper-ceiling-mosaic"; });
+  expect_refused(f, "not a ceiling tour file");
+  patched([](nlohmann::json& j) { j["relay_images"][1]["frame"] = 0; });
+  expect_refused(f, "frames must increase");
+  patched([](nlohmann::json& j) { j["relay_images"][2]["frame"] = 40; });
+  expect_refused(f, "outside the tour's frames");
+  patched([](nlohmann::json& j) { j["breaks"] = {2}; });
+  expect_refused(f, "break 2 names no pair");
+  patched([](nlohmann::json& j) { j["unlocalised_frames"] = 41; });
+  expect_refused(f, "unlocalised_frames 41");
+  patched([](nlohmann::json& j) { j["relay_images"][0]["x_m"] = "zero"; });
+  expect_refused(f, "missing or mistyped field");
+  patched([](nlohmann::json& j) { j["odometry_disagreement_m"] = -0.1; });
+  expect_refused(f, "odometry_disagreement_m");
+}
+
+TEST(CeilingTourFile, InvalidToursAreNotWritten) {
+  test::TempDir dir("ceiling_tour");
+  const fs::path f = dir.path() / "ceiling_tour.json";
+  CeilingTour one = sample();
+  one.relay_images.resize(1);
+  one.breaks.clear();
+  EXPECT_THROW(save_ceiling_tour(one, f), CeilingTourError);
+  CeilingTour nan_pose = sample();
+  nan_pose.relay_images[1].T_mosaic_base.y_m = std::nan("");
+  EXPECT_THROW(save_ceiling_tour(nan_pose, f), CeilingTourError);
+  EXPECT_FALSE(fs::exists(f));
+}
+
+}  // namespace
+}  // namespace pepper::core::ceiling
