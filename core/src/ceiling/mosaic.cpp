@@ -110,28 +110,7 @@ void save_mosaic(const Mosaic& mosaic, const fs::path& file) {
   j["crc32"] = body_crc(j);
   const std::string text = j.dump(1) + "\n";
 
-  // Atomic: a sibling temporary file, synced, renamed over the old one, the folder synced.
-  const fs::path dir = file.parent_path().empty() ? fs::path(".") : file.parent_path();
-  const fs::path tmp = dir / (file.filename().string() + ".tmp-" + std::to_string(::getpid()));
-  memory::detail::write_file_synced(
-      tmp, reinterpret_cast<const uint8_t*>(text.data()), text.size(),
-      [&](const fs::path& path, const std::string& what) {
-        const int cause = errno;  // io_error reports it; the clean-up must not replace it
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        errno = cause;
-        io_error(path, what);
-      });
-  if (::rename(tmp.c_str(), file.c_str()) != 0) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    io_error(file, "cannot rename the new mosaic into place");
-  }
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
+  memory::detail::replace_file_atomically(file, text, io_error);
 }
 
 Mosaic load_mosaic(const fs::path& file) {
