@@ -96,6 +96,11 @@ void RecordingWriter::append(const core::Frame& frame, double v_m_s, double omeg
   ++count_;
 }
 
+core::CameraIntrinsics session_camera(const core::CameraIntrinsics& reported,
+                                      const std::optional<core::CameraIntrinsics>& calibration) {
+  return calibration ? calibration->scaled_to(reported.width_px, reported.height_px) : reported;
+}
+
 Recording read_recording(const fs::path& folder,
                          const std::optional<core::CameraIntrinsics>& camera_override,
                          double nominal_fps) {

@@ -75,6 +75,12 @@ struct Recording {
   std::vector<std::string> warnings;  ///< e.g. a partial last index line that was skipped
 };
 
+/// The camera a live session normalises features with: `calibration` (a `--camera` file, e.g.
+/// with Pepper's lens model) scaled to the size the robot's camera delivers, else the intrinsics
+/// the robot reports. Teach records it, and replay checks it against the map's.
+core::CameraIntrinsics session_camera(const core::CameraIntrinsics& reported,
+                                      const std::optional<core::CameraIntrinsics>& calibration);
+
 /// Reads a recording folder (ours, or a plain image folder when `camera_override` is given or the
 /// folder has no manifest). Plain folders get t_ns = i * 1e9 / nominal_fps.
 /// Throws RecordingError naming the file on any problem (missing camera for a plain folder, bad

@@ -188,11 +188,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                 {"head_yaw_rad", head.head_yaw_rad},
                 {"head_pitch_rad", head.head_pitch_rad},
                 {"max_error_rad", head.max_error_rad}});
-    const core::CameraIntrinsics reported = bridge.start_camera(options.camera);
     const core::CameraIntrinsics camera =
-        options.camera_model
-            ? options.camera_model->scaled_to(reported.width_px, reported.height_px)
-            : reported;
+        session_camera(bridge.start_camera(options.camera), options.camera_model);
     check_intrinsics(map.camera, camera);
     if (options.camera_model && camera.model != map.camera.model) {
       throw std::invalid_argument(

@@ -181,11 +181,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       result.warnings.push_back("head lock not holding: max error " +
                                 std::to_string(head.max_error_rad) + " rad");
     }
-    const core::CameraIntrinsics started = bridge.start_camera(options.camera);
     const core::CameraIntrinsics camera =
-        options.camera_model
-            ? options.camera_model->scaled_to(started.width_px, started.height_px)
-            : started;
+        session_camera(bridge.start_camera(options.camera), options.camera_model);
     link.publish_state({{"connection",
                          {{"robot", "connected"},
                           {"head_locked", head.holding},
