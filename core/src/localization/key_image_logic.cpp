@@ -150,13 +150,14 @@ const std::array<SwitchRule, 6> kSwitchRules{{
    kCriterionPassedNext, passed_next,
    "IN's points appear larger than taught: the robot is past IN (with near-identical IN and "
    "INN the paper's rules can stall)"},
-  {"passed IN by distance", Kind::kAddition, "navigator.blind_passed_driven_factor",
-   kCriterionPassedByDistance, passed_by_distance,
-   "scale unknown and the commands drove well past the taught length (a bare wall)"},
-  {"passed IN by odometry", Kind::kAddition,
+  {"passed IN by travel (odometry)", Kind::kAddition,
    "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
    kCriterionPassedByOdometry, passed_by_odometry,
    "scale unknown and the robot's odometry, carried along the taught path, is past IN"},
+  {"passed IN by travel (commands)", Kind::kAddition, "",
+   kCriterionPassedByDistance, passed_by_distance,
+   "the same where there is no odometry (map or robot): the commands drove twice the taught "
+   "length (a bare wall)"},
 }};
 // clang-format on
 

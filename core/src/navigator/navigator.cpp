@@ -104,8 +104,6 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(blind_switch_min_driven_fraction >= 0.0 && blind_switch_min_driven_fraction <= 1.0,
         "blind_switch_min_driven_fraction", blind_switch_min_driven_fraction,
         "0 (off) or in (0, 1]");
-  check(blind_passed_driven_factor == 0.0 || blind_passed_driven_factor >= 1.0,
-        "blind_passed_driven_factor", blind_passed_driven_factor, "0 (off) or >= 1");
   check(turn_feedforward >= 0.0 && turn_feedforward <= 2.0, "turn_feedforward", turn_feedforward,
         "in [0, 2]");
   check(turn_feedforward_max_lead_rad >= 0.0, "turn_feedforward_max_lead_rad",
@@ -208,6 +206,17 @@ std::vector<std::optional<OdometryPose>> taught_odometry(const memory::VisualMem
   for (const memory::KeyImage& k : map.key_images) out.push_back(k.odom);
   return out;
 }
+
+// "Passed IN by travel" without odometry (maps built from image folders, or a robot that reports
+// none): a switch is wanted once the distance commanded on a segment entered by a switch reaches
+// this x its taught length while IN's scale is unknown. The taught length of such a map is itself
+// the taught time x vnhv.teach_speed_m_s, hence the margin. Measured when it was an option
+// (session 14, room_corridor_room light run 2, VGA, seed 1): key image 12 faces a bare wall;
+// with the light change neither it nor key image 13 kept a point, no rule fired, the robot drove
+// 0.39 m on the 0.08 m segment 11 -> 12 into the first left turn's wall and was lost at 6.0 m;
+// with 2 it switched after 0.18 m and completed (1.7 / 4.4 cm). Since then the map keeps
+// odometry, and the odometry source of the rule took over there.
+constexpr double kPassedByCommandsFactor = 2.0;
 
 // A vision fix moves the odometry estimate this far towards itself (1: all the way), times the
 // fix's weight against the prediction (vnhv_omega: 1 at the prediction, 0 at the gate). Half: one
@@ -775,11 +784,17 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
   }
   if (odom_progress) tel.odom_progress = *odom_progress;
   const bool odom_passed_next = odom_progress && *odom_progress >= seg.next;
+  // "Passed IN by travel" (one rule, two sources): while IN's scale is unknown, how far the robot
+  // went says whether it is past IN. The odometry carried along the taught path when the frames
+  // and the map have it (bit 32); otherwise the distance commanded since the switch against
+  // kPassedByCommandsFactor x the segment's taught length (bit 16). The commanded distance is not
+  // consulted where odometry exists: off there, the generated set kept 80/80 and its lateral RMS
+  // went down (docs/method/navigator.md, session 22 ablation).
+  const bool has_odometry = odom_ && tracker_.usable();
   counts.passed_by_odometry = odom_passed_next && std::isnan(counts.next_scale_ratio);
-  if (seg.next_next && options_.blind_passed_driven_factor > 0.0 && segment_from_switch_ &&
+  if (!has_odometry && seg.next_next && segment_from_switch_ &&
       std::isnan(counts.next_scale_ratio)) {
-    counts.passed_by_distance =
-        segment_driven_m_ >= options_.blind_passed_driven_factor * segment_taught_m();
+    counts.passed_by_distance = segment_driven_m_ >= kPassedByCommandsFactor * segment_taught_m();
   }
   if (seg.next_next) {
     const int nn = *seg.next_next;

@@ -112,9 +112,11 @@ TEST(ConfigParameters, RangeErrorNamesTheKeyTheValueTheRangeAndTheUnit) {
                 .find("navigator.vnhv.kp_1_m2 = -1: must be in (0, inf) (1/m^2)"),
             std::string::npos)
       << set_error("navigator.vnhv.kp_1_m2=-1");
-  EXPECT_NE(set_error("navigator.blind_passed_driven_factor=0.5")
-                .find("navigator.blind_passed_driven_factor = 0.5: must be 0 (off) or in [1, inf)"),
-            std::string::npos);
+  EXPECT_NE(set_error("navigator.blind_switch_min_driven_fraction=1.5")
+                .find("navigator.blind_switch_min_driven_fraction = 1.5: must be 0 (off) or in "
+                      "(0, 1]"),
+            std::string::npos)
+      << set_error("navigator.blind_switch_min_driven_fraction=1.5");
   // A bound named by another parameter: its value is given.
   const std::string cross = set_error("features.matcher.trifocal.min_iterations=600");
   EXPECT_NE(cross.find("features.matcher.trifocal.min_iterations = 600: must be in "

@@ -40,10 +40,21 @@ struct SwitchGap {
 };
 struct SwitchRun {
   std::vector<SwitchGap> gaps;
-  int by_distance = 0;  ///< frames with the "passed IN by distance" criterion bit
+  int by_distance = 0;  ///< frames with the "passed IN by travel (commands)" criterion bit
+  int by_odometry = 0;  ///< frames with the "passed IN by travel (odometry)" criterion bit
 };
-SwitchRun replay_switch_gaps(const NavigatorOptions& o, int64_t time_divisor) {
-  Navigator nav(tour().map, o);
+// with_odometry: the map keeps each key image's taught pose as its odometry and every frame
+// carries the taught path's pose (exact odometry).
+SwitchRun replay_switch_gaps(const NavigatorOptions& o, int64_t time_divisor,
+                             bool with_odometry = false) {
+  memory::VisualMemory map = tour().map;
+  if (with_odometry) {
+    for (memory::KeyImage& k : map.key_images) {
+      const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
+      k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+    }
+  }
+  Navigator nav(map, o);
   const auto& keys = tour().map.key_images;
   const int64_t t0 = tour().frames.front().t_ns;
   SwitchRun out;
@@ -55,9 +66,14 @@ SwitchRun replay_switch_gaps(const NavigatorOptions& o, int64_t time_divisor) {
   for (const Frame& taught : tour().frames) {
     Frame f = taught;
     f.t_ns = t0 + (taught.t_ns - t0) / time_divisor;
+    if (with_odometry) {
+      const sim::Pose2D& p = tour().path.at(static_cast<size_t>(taught.index));
+      f.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+    }
     if (!last.stop) driven_m += last.v_m_s * static_cast<double>(f.t_ns - last_t_ns) * 1e-9;
     const StepResult r = nav.step(f);
     if (r.telemetry.switch_criterion & localization::kCriterionPassedByDistance) ++out.by_distance;
+    if (r.telemetry.switch_criterion & localization::kCriterionPassedByOdometry) ++out.by_odometry;
     if (r.telemetry.switched && started) {
       out.gaps.push_back({driven_m, static_cast<double>(keys[in].t_ns - keys[ip].t_ns) * 1e-9 *
                                         o.vnhv.teach_speed_m_s});
@@ -266,7 +282,6 @@ TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
     o.arrival_min_scale_points = 100'000;
     o.min_scale_lines = 0;
     o.blind_switch_min_driven_fraction = fraction;
-    o.blind_passed_driven_factor = 0.0;  // the guard alone
     o.vnhv.teach_speed_m_s = 0.1;
     return replay_switch_gaps(o, /*time_divisor=*/2).gaps;
   };
@@ -279,36 +294,35 @@ TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
   EXPECT_GT(sooner, 0);
 }
 
-// blind_passed_driven_factor: with the scale ratio unknown on every frame, a segment is left once
-// the commands drove the factor x its taught length (taught lengths made short here, 0.02 m/s x
-// taught time, so that the rule has to act before the count rules do); off, the count rules
-// alone let segments run longer.
-TEST(Navigator, PassedByDistanceLeavesASegmentOnceTheCommandsDroveIt) {
-  auto run = [](double factor) {
+// "Passed IN by travel" without odometry: with the scale ratio unknown on every frame, a segment
+// is left once the commands drove twice its taught length (taught lengths made short here,
+// 0.02 m/s x taught time, so that the rule has to act before the count rules do). With the
+// odometry in the map and the frames, the commanded distance is never consulted (the odometry
+// source of the rule decides).
+TEST(Navigator, PassedByTravelUsesTheCommandsOnlyWithoutOdometry) {
+  auto run = [](bool with_odometry) {
     NavigatorOptions o;
     o.min_scale_points = 100'000;  // no scale ratio, ever
     o.arrival_min_scale_points = 100'000;
     o.min_scale_lines = 0;
     o.blind_switch_min_driven_fraction = 0.0;
-    o.blind_passed_driven_factor = factor;
     o.vnhv.teach_speed_m_s = 0.02;
-    return replay_switch_gaps(o, /*time_divisor=*/1);
+    return replay_switch_gaps(o, /*time_divisor=*/1, with_odometry);
   };
-  const SwitchRun on = run(1.5);
-  ASSERT_GE(on.gaps.size(), 3u);
-  EXPECT_GT(on.by_distance, 0);
+  const SwitchRun blind = run(false);
+  ASSERT_GE(blind.gaps.size(), 3u);
+  EXPECT_GT(blind.by_distance, 0);
   // The switch comes on the second frame past the mark (consecutive_frames 2): at most two
-  // frames of 0.15 m/s x 0.2 s beyond 1.5 x the taught length.
-  for (const SwitchGap& g : on.gaps) {
-    EXPECT_LE(g.driven_m, 1.5 * g.taught_m + 2 * 0.15 * 0.2 + 1e-9);
+  // frames of 0.15 m/s x 0.2 s beyond 2 x the taught length.
+  int late = 0;
+  for (const SwitchGap& g : blind.gaps) {
+    EXPECT_LE(g.driven_m, 2.0 * g.taught_m + 2 * 0.15 * 0.2 + 1e-9);
+    late += g.driven_m > g.taught_m ? 1 : 0;
   }
-  const SwitchRun off = run(0.0);
-  EXPECT_EQ(off.by_distance, 0);
-  int later = 0;
-  for (const SwitchGap& g : off.gaps) {
-    later += g.driven_m > 1.5 * g.taught_m + 2 * 0.15 * 0.2 ? 1 : 0;
-  }
-  EXPECT_GT(later, 0) << "the count rules alone should leave some segment later";
+  EXPECT_GT(late, 0) << "some segment should need the rule (driven past its taught length)";
+  const SwitchRun odometry = run(true);
+  EXPECT_EQ(odometry.by_distance, 0);
+  EXPECT_GT(odometry.by_odometry, 0);
 }
 
 // turn_feedforward: where IBVS drives a segment taught as a turn, its demand is moved to the

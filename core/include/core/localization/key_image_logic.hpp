@@ -71,9 +71,9 @@ struct SwitchCounts {
   /// instead (the navigator: the commands drove enough of the segment, NavigatorOptions::
   /// blind_switch_min_driven_fraction). true: the paper's rules decide alone.
   bool blind_switch_allowed = true;
-  /// The caller's verdict that the robot has driven well past IN while the scale ratio is
-  /// unknown (the navigator: NavigatorOptions::blind_passed_driven_factor): a switch is wanted,
-  /// as for "passed IN" (criterion bit 16).
+  /// The caller's verdict, where it has no odometry, that the commands drove well past IN while
+  /// the scale ratio is unknown (the navigator: twice the segment's taught length): a switch is
+  /// wanted, as for "passed IN" (criterion bit 16).
   bool passed_by_distance = false;
   /// The caller's verdict that the robot's odometry, carried along the taught path, is past IN
   /// while the scale ratio is unknown (the navigator: navigator/path_tracker.hpp): a switch is

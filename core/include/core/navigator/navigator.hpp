@@ -155,15 +155,6 @@ struct NavigatorOptions {
   /// (teach drives run at 0.2-0.25 m/s) and after 0.1 in turns (0.08 m/s): replay speed
   /// decides, so the guard counts distance. 0: off, else in (0, 1].
   double blind_switch_min_driven_fraction = 0.6;
-  /// Passed IN by distance: while the scale ratio with IN is unknown, on a segment entered by a
-  /// switch, a switch is wanted once the commanded distance on the segment reaches this x its
-  /// taught length (the robot drove on past IN with nothing left to see of it, e.g. a bare
-  /// wall under changed light). Measured (session 14, room_corridor_room light run 2, VGA, seed
-  /// 1, VNHV): key image 12 faces a bare wall; with the light change neither it nor key image 13
-  /// kept a point, no rule fired, the robot drove 0.39 m on the 0.08 m segment 11 -> 12 into the
-  /// first left turn's wall and was lost at 6.0 m (40 cm off); with 2 it switches after 0.18 m
-  /// and completes (1.7 / 4.4 cm). 0: off, else >= 1.
-  double blind_passed_driven_factor = 2.0;
   /// Turn feed-forward (VNHV controller): on a segment entered by a switch, on frames where VNHV
   /// has no estimate (no model, or a model that has not located the image yet: IBVS drives) and
   /// taught as a turn (IP's yaw w.r.t. IN, fitted once per segment from
