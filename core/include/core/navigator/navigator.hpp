@@ -298,6 +298,9 @@ class Navigator {
   /// corrects the odometry estimate's heading (a Kalman update against heading_sigma_rad_;
   /// telemetry line_yaw_*).
   void correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel);
+  /// The matched lines on the floor give the robot's position relative to IN across them
+  /// (geometry/floor_lines.hpp): a Kalman update of the odometry estimate's position.
+  void correct_position_from_floor_lines(features::FrameMatcher& fm, Telemetry& tel);
   /// Whether dead reckoning can drive this frame (StepFacts::can_dead_reckon).
   bool can_dead_reckon() const;
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
