@@ -722,14 +722,17 @@ void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior) 
   klt_priors_[key_id] = std::move(prior);
 }
 
+const TwoViewMatches* FrameMatcher::adopt_speculative(int64_t key_id) {
+  const auto held = speculative_.find(key_id);
+  if (held == speculative_.end()) return nullptr;
+  const auto it = two_view_.emplace(key_id, std::move(held->second)).first;
+  speculative_.erase(held);
+  return &it->second;
+}
+
 const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures& key) {
-  auto it = two_view_.find(key_id);
-  if (it != two_view_.end()) return it->second;
-  if (const auto held = speculative_.find(key_id); held != speculative_.end()) {
-    it = two_view_.emplace(key_id, std::move(held->second)).first;
-    speculative_.erase(held);
-    return it->second;
-  }
+  if (const auto it = two_view_.find(key_id); it != two_view_.end()) return it->second;
+  if (const TwoViewMatches* held = adopt_speculative(key_id)) return *held;
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
@@ -755,11 +758,8 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
                                   " has no features");
     if (two_view_.count(k.id) != 0) continue;
     if (k.speculative && !concurrent()) continue;  // on one thread: work for nothing
-    if (const auto held = speculative_.find(k.id); held != speculative_.end()) {
-      if (!k.speculative) {  // asked for now: as two_view() would
-        two_view_.emplace(k.id, std::move(held->second));
-        speculative_.erase(held);
-      }
+    if (speculative_.count(k.id) != 0) {
+      if (!k.speculative) adopt_speculative(k.id);  // asked for now: as two_view() would
       continue;
     }
     // An id given twice is computed once, held back only if every mention is speculative.

@@ -273,6 +273,8 @@ class FrameMatcher {
   MatchTimings timings_;
   std::unordered_map<int64_t, TwoViewMatches> two_view_;
   std::unordered_map<int64_t, TwoViewMatches> speculative_;  ///< computed, not asked for yet
+  /// Moves a held speculative result for `key_id` to the asked-for ones; null when none.
+  const TwoViewMatches* adopt_speculative(int64_t key_id);
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
   std::unordered_map<int64_t, TwoViewMatches> control_;
