@@ -40,6 +40,18 @@ std::optional<Eigen::Vector2d> clipped_floor_point(const cv::Point2d& near, cons
   return floor_point(near + (far - near) * lo, camera, max_range_m);
 }
 
+// The vertical component of the unit normal of the plane through the camera centre and the
+// segment, in the level frame (x right, y down, z forward).
+double leverage(const NormSegment& s, const FloorCamera& camera) {
+  const double c = std::cos(camera.pitch_rad), sn = std::sin(camera.pitch_rad);
+  auto level = [&](const cv::Point2d& p) {
+    return Eigen::Vector3d(p.x, c * p.y + sn, -sn * p.y + c);
+  };
+  const Eigen::Vector3d n = level(s.p0).cross(level(s.p1));
+  const double norm = n.norm();
+  return norm > 0.0 ? std::abs(n.y()) / norm : 0.0;
+}
+
 std::optional<FloorLine> floor_line(const NormSegment& s, const FloorCamera& camera,
                                     double max_range_m) {
   // The end nearer the camera (lower in the image) must be on the floor within range; the other
@@ -129,6 +141,7 @@ std::vector<std::string> FloorLineOptions::validate() const {
   }
   if (!(gate_sigmas > 0.0)) bad("gate_sigmas", gate_sigmas, "> 0");
   if (min_inliers < 1) bad("min_inliers", min_inliers, ">= 1");
+  if (!(min_leverage > 0.0 && min_leverage < 1.0)) bad("min_leverage", min_leverage, "in (0, 1)");
   if (!(max_angle_to_forward_rad > 0.0 && max_angle_to_forward_rad <= M_PI / 2)) {
     bad("max_angle_to_forward_rad", max_angle_to_forward_rad, "in (0, pi/2]");
   }
@@ -140,6 +153,10 @@ std::optional<FloorLineEquation> floor_line_equation(const NormSegment& seg_a,
                                                      const FloorCamera& camera,
                                                      const FloorLineOptions& options,
                                                      double yaw_sigma_rad) {
+  if (leverage(seg_a, camera) < options.min_leverage ||
+      leverage(seg_b, camera) < options.min_leverage) {
+    return std::nullopt;
+  }
   const auto r0 = read(seg_a, seg_b, yaw_rad, camera, camera, options.max_range_m);
   if (!r0) return std::nullopt;
   // The line's direction is (n.y, -n.x): its angle to the forward axis is that of n to the left.

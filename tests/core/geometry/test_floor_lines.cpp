@@ -232,6 +232,10 @@ TEST(FloorLines, NothingUsableGivesNoFix) {
                             pepper_camera(), 0.0, 1);
   ASSERT_EQ(one.size(), 1u);
   EXPECT_FALSE(estimate_floor_position(one, pepper_camera(), prior));
+  // A vertical line (a door frame, or its reflection in a shiny floor) is not a floor line,
+  // though it lies below the horizon: it would back-project through the camera itself.
+  const NormSegment post{{0.1, 0.14}, {0.1, 0.33}};
+  EXPECT_FALSE(floor_line_equation(post, post, 0.0, pepper_camera(), {}));
   // Degenerate segments (both ends equal) are skipped, never a crash.
   const NormSegment dot{{0.1, 0.2}, {0.1, 0.2}};
   EXPECT_FALSE(estimate_floor_position({{dot, dot}, {dot, dot}}, pepper_camera(), prior));

@@ -83,6 +83,13 @@ struct FloorLineOptions {
   /// low: lines across the view (a tile edge, but also a lamp's reflection in a shiny floor,
   /// which back-projects to a third of its distance) say little about it.
   double max_angle_to_forward_rad = M_PI / 2;
+  /// A segment's interpretation plane (the camera centre and the segment) needs a unit normal
+  /// with at least this vertical component in both views, (0, 1): below, the segment is (nearly)
+  /// vertical in the level frame, the image of a vertical 3D line (a door frame, or its
+  /// reflection in a shiny floor) that back-projects to a floor line through the camera itself
+  /// and would always say "no lateral offset". A floor line at lateral distance d from the
+  /// camera has d / sqrt(d^2 + h^2): 0.2 leaves out lines within 0.24 m of Pepper's camera.
+  double min_leverage = 0.2;
   /// Agreeing lines needed for a fix, >= 1.
   int min_inliers = 2;
   std::vector<std::string> validate() const;
