@@ -1057,11 +1057,10 @@ double Navigator::odometry_demand(bool& on_the_spot) {
   return std::clamp(demand, -max_omega, max_omega);
 }
 
-void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel) {
-  if (!odom_ || !tracker_.usable() || !tracker_.estimate() || !switcher_) return;
-  const int in = switcher_->segment().next;
-  const features::ImageFeatures& k = key(in);
-  const features::TwoViewMatches& tv = fm.two_view(in, k);  // cached: the switching counts' own
+std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> Navigator::line_pairs_with(
+    features::FrameMatcher& fm, int key_index) {
+  const features::ImageFeatures& k = key(key_index);
+  const features::TwoViewMatches& tv = fm.two_view(key_index, k);  // cached: the switching's own
   std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> pairs;
   pairs.reserve(tv.lines.size());
   for (const features::LineMatch& m : tv.lines) {
@@ -1069,6 +1068,13 @@ void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry
     const features::LineSegment& b = fm.current().lines[static_cast<size_t>(m.idx_b)];
     pairs.push_back({{a.p0_norm, a.p1_norm}, {b.p0_norm, b.p1_norm}});
   }
+  return pairs;
+}
+
+void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel) {
+  if (!odom_ || !tracker_.usable() || !tracker_.estimate() || !switcher_) return;
+  const int in = switcher_->segment().next;
+  const auto pairs = line_pairs_with(fm, in);
   // Only line structures where the odometry expects the room compete (a moved shelf's boards
   // are as horizontal as the skirting; line_yaw.hpp).
   const geometry::YawPrior prior{
@@ -1096,15 +1102,7 @@ void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry
 void Navigator::correct_position_from_floor_lines(features::FrameMatcher& fm, Telemetry& tel) {
   if (!odom_ || !tracker_.usable() || !tracker_.estimate() || !switcher_) return;
   const int in = switcher_->segment().next;
-  const features::ImageFeatures& k = key(in);
-  const features::TwoViewMatches& tv = fm.two_view(in, k);  // cached
-  std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> pairs;
-  pairs.reserve(tv.lines.size());
-  for (const features::LineMatch& m : tv.lines) {
-    const features::LineSegment& a = k.lines[static_cast<size_t>(m.idx_a)];
-    const features::LineSegment& b = fm.current().lines[static_cast<size_t>(m.idx_b)];
-    pairs.push_back({{a.p0_norm, a.p1_norm}, {b.p0_norm, b.p1_norm}});
-  }
+  const auto pairs = line_pairs_with(fm, in);
   if (pairs.size() < 2) return;
   // The robot in IN's taught frame; the floor frames are the optical centres', `ahead` of the
   // base's rotation axis: t_cam = t_base + (R(yaw) - I) (ahead, 0).

@@ -42,6 +42,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/control/ibvs_law.hpp"
@@ -50,6 +51,7 @@
 #include "core/features/image_features.hpp"
 #include "core/features/matching.hpp"
 #include "core/frame.hpp"
+#include "core/geometry/planar_trifocal.hpp"  // NormSegment
 #include "core/localization/initial_localizer.hpp"
 #include "core/localization/key_image_logic.hpp"
 #include "core/memory/visual_memory.hpp"
@@ -297,6 +299,10 @@ class Navigator {
   /// Without a VNHV fix this frame: the heading relative to IN from the lines matched with it
   /// corrects the odometry estimate's heading (a Kalman update against heading_sigma_rad_;
   /// telemetry line_yaw_*).
+  /// The verified line matches with key image `key_index` as normalised segment pairs (key,
+  /// current).
+  std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> line_pairs_with(
+      features::FrameMatcher& fm, int key_index);
   void correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel);
   /// The matched lines on the floor give the robot's position relative to IN across them
   /// (geometry/floor_lines.hpp): a Kalman update of the odometry estimate's position.
