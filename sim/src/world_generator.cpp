@@ -950,6 +950,8 @@ void add_lamps(Draft& d) {
 // passed its checks, so the rest of a seed's world is what it was before they existed; nothing
 // here changes the tour or its clearances (whatever hangs stays above 2 m).
 constexpr double kCeilingTileM = 0.6;  // the ceiling texture's tile (its grid starts at 0, 0)
+// Places drawn per fixture before giving it up: a narrow corridor has little room beside its lamps.
+constexpr int kCeilingTries = 20;
 
 double wall_distance(const Draft& d, const Vec2& p) {
   double dist = 1e9;
@@ -1003,19 +1005,19 @@ void add_ceiling_items(Draft& d, Rng& rng) {
   // 6 m^2: drawn where they fit, at random places, so no two stretches of ceiling look alike.
   auto fill = [&](const std::function<Vec2()>& draw, double area_m2) {
     for (int i = 0, n = static_cast<int>(area_m2 / 3.0) + 1; i < n; ++i)
-      for (int tries = 0; tries < 4 && !small("sprinkler", draw(), "ceiling_metal"); ++tries) {}
+      for (int tries = 0; tries < kCeilingTries && !small("sprinkler", draw(), "ceiling_metal"); ++tries) {}
     for (int i = 0, n = static_cast<int>(area_m2 / 12.0) + 1; i < n; ++i)
-      for (int tries = 0; tries < 4 && !small("detector", draw(), "ceiling_white"); ++tries) {}
+      for (int tries = 0; tries < kCeilingTries && !small("detector", draw(), "ceiling_white"); ++tries) {}
     for (int i = 0, n = static_cast<int>(area_m2 / 8.0) + 1; i < n; ++i) {
       const bool square = rng.chance(0.5);
       const Vec2 size = square ? Vec2(0.6, 0.6) : Vec2(rng.uniform(0.6, 1.2), 0.3);
       const double yaw = rng.chance(0.5) ? 0.0 : 90.0;
-      for (int tries = 0; tries < 4; ++tries)
+      for (int tries = 0; tries < kCeilingTries; ++tries)
         if (flat("vent", draw(), size, yaw, square ? "ceiling_grille" : "ceiling_vent")) break;
     }
     for (int i = 0, n = static_cast<int>(area_m2 / 6.0) + 1; i < n; ++i) {
       const std::string& tex = rng.pick(kTileTextures);
-      for (int tries = 0; tries < 4; ++tries)
+      for (int tries = 0; tries < kCeilingTries; ++tries)
         if (flat("tile", tile_centre(draw()), {kCeilingTileM, kCeilingTileM}, 0.0, tex)) break;
     }
   };
