@@ -462,6 +462,159 @@ void parse_wall(Builder& b, Map& m, double ceiling_h) {
   m.done();
 }
 
+// Ceiling fixtures (docs/mock_robot.md "Ceiling items"). Flat kinds are drawn a few millimetres
+// under the ceiling, each kind at its own offset so that a vent laid over a replaced tile wins the
+// depth test everywhere (lamps are at 5 mm): tile 2 mm, vent 4 mm.
+constexpr double kTileOffsetM = 0.002;
+constexpr double kVentOffsetM = 0.004;
+constexpr double kSignThicknessM = 0.04;
+constexpr double kSignRodM = 0.012;  // side of the two square rods a sign hangs from
+// Nothing under the ceiling has a collision model: whatever hangs must stay above a person's head
+// and the door tops (2.05 m in the shipped worlds), far above the robot (kRobotHeightM).
+constexpr double kMinHangingHeightM = 2.0;
+
+struct CeilingKindName {
+  CeilingItemKind kind;
+  const char* name;
+};
+constexpr std::array<CeilingKindName, 6> kCeilingKinds{{
+    {CeilingItemKind::kVent, "vent"},
+    {CeilingItemKind::kTile, "tile"},
+    {CeilingItemKind::kSprinkler, "sprinkler"},
+    {CeilingItemKind::kDetector, "detector"},
+    {CeilingItemKind::kBeam, "beam"},
+    {CeilingItemKind::kSign, "sign"},
+}};
+
+void parse_ceiling_item(Builder& b, Map& m, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
+                        double H) {
+  CeilingItem item;
+  try {
+    item.kind = ceiling_item_kind_from_string(m.str_req("kind"));
+  } catch (const std::invalid_argument& e) {
+    m.fail("kind", e.what());
+  }
+  item.what = m.str("name", m.path());
+  // The key whose value sets the footprint (named when it leaves the ceiling) and the one that
+  // sets how low the item hangs (named when it hangs too low).
+  std::string where_key = "center";
+  std::string drop_key;
+  double drop_m = 0.0;  // ceiling to the item's lowest point
+  auto rotated_quad = [&](const Style& st, double offset_m) {
+    const Eigen::Vector2d ex(std::cos(item.yaw_rad), std::sin(item.yaw_rad));
+    const Eigen::Vector2d ey(-ex.y(), ex.x());
+    // Seen from below: axis_u along yaw, axis_v = -ey keeps the quad's normal pointing down
+    // (image rows run across the item, as a poster's rows run down a wall).
+    const Eigen::Vector2d o = item.center_m - ex * item.size_m.x() / 2 + ey * item.size_m.y() / 2;
+    b.add(b.quad({o.x(), o.y(), H - offset_m}, {ex.x(), ex.y(), 0}, {-ey.x(), -ey.y(), 0},
+                 item.size_m.x(), item.size_m.y(), st, false));
+    item.z_bottom_m = item.z_top_m = H - offset_m;
+  };
+  auto positive_size2 = [&](const Eigen::Vector2d& def) {
+    const Eigen::Vector2d sz = m.vec2("size_m", def);
+    if (!(sz.x() > 0.0 && sz.y() > 0.0)) m.fail("size_m", "sizes must be > 0");
+    return sz;
+  };
+  switch (item.kind) {
+    case CeilingItemKind::kVent:
+    case CeilingItemKind::kTile: {
+      const bool vent = item.kind == CeilingItemKind::kVent;
+      item.center_m = m.vec2_req("center");
+      item.size_m = positive_size2({0.6, 0.6});
+      item.yaw_rad = m.num("yaw_deg", 0.0) * kDeg;
+      // Default: the texture stretched once over the item (a grille, one tile).
+      const Style st = b.style(m, item.size_m);
+      m.done();
+      rotated_quad(st, vent ? kVentOffsetM : kTileOffsetM);
+      break;
+    }
+    case CeilingItemKind::kSprinkler:
+    case CeilingItemKind::kDetector: {
+      const bool sprinkler = item.kind == CeilingItemKind::kSprinkler;
+      item.center_m = m.vec2_req("center");
+      const double width = m.positive("width_m", sprinkler ? 0.06 : 0.12);
+      drop_m = m.positive("drop_m", sprinkler ? 0.03 : 0.04);
+      drop_key = "drop_m";
+      item.size_m = {width, width};
+      item.yaw_rad = m.num("yaw_deg", 0.0) * kDeg;
+      const Style st = b.style(m, {width, width});
+      m.done();
+      item.z_top_m = H;
+      item.z_bottom_m = H - drop_m;
+      b.box(item.center_m, {width, width, drop_m}, item.yaw_rad, item.z_bottom_m, st, st,
+            std::nullopt);
+      break;
+    }
+    case CeilingItemKind::kBeam: {
+      const Eigen::Vector2d from = m.vec2_req("from");
+      const Eigen::Vector2d to = m.vec2_req("to");
+      const double len = (to - from).norm();
+      if (len < 0.05) m.fail("to", "a beam needs 'from' and 'to' at least 0.05 m apart");
+      const double width = m.positive("width_m", 0.3);
+      drop_m = m.positive("depth_m", 0.25);
+      drop_key = "depth_m";
+      where_key = "from";
+      item.center_m = 0.5 * (from + to);
+      item.size_m = {len, width};
+      item.yaw_rad = std::atan2(to.y() - from.y(), to.x() - from.x());
+      const Style st = b.style(m, {1.0, 1.0});
+      m.done();
+      item.z_top_m = H;
+      item.z_bottom_m = H - drop_m;
+      b.box(item.center_m, {len, width, drop_m}, item.yaw_rad, item.z_bottom_m, st, st,
+            std::nullopt);
+      break;
+    }
+    case CeilingItemKind::kSign: {
+      item.center_m = m.vec2_req("center");
+      // yaw_deg: where the sign's face looks (its normal), as a box's front.
+      item.yaw_rad = m.num("yaw_deg", 0.0) * kDeg;
+      const Eigen::Vector2d face = positive_size2({0.4, 0.2});  // width, height
+      const double rods_m = m.positive("drop_m", 0.15);  // ceiling to the sign's top edge
+      drop_m = rods_m + face.y();
+      drop_key = "drop_m";
+      // The face texture once over each large face (tile = the face), both sides.
+      const Style st = b.style(m, face);
+      m.done();
+      item.size_m = {kSignThicknessM, face.x()};
+      item.z_top_m = H;
+      item.z_bottom_m = H - drop_m;
+      b.box(item.center_m, {kSignThicknessM, face.x(), face.y()}, item.yaw_rad, item.z_bottom_m,
+            st, st, std::nullopt);
+      const Eigen::Vector2d across(-std::sin(item.yaw_rad), std::cos(item.yaw_rad));
+      Style rod = st;
+      rod.tile_m = {kSignRodM, rods_m};
+      rod.brightness = 0.4 * st.brightness;  // dark metal rods, whatever the face shows
+      for (double side : {-1.0, 1.0})
+        b.box(item.center_m + side * across * face.x() / 3, {kSignRodM, kSignRodM, rods_m},
+              item.yaw_rad, H - rods_m, rod, rod, std::nullopt);
+      break;
+    }
+  }
+  // The footprint's corners must lie under the ceiling (the floor's extent).
+  const Eigen::Vector2d ex(std::cos(item.yaw_rad), std::sin(item.yaw_rad));
+  const Eigen::Vector2d ey(-ex.y(), ex.x());
+  for (double sx : {-0.5, 0.5})
+    for (double sy : {-0.5, 0.5}) {
+      const Eigen::Vector2d c = item.center_m + sx * item.size_m.x() * ex + sy * item.size_m.y() * ey;
+      if (c.x() < lo.x() - 1e-9 || c.x() > hi.x() + 1e-9 || c.y() < lo.y() - 1e-9 ||
+          c.y() > hi.y() + 1e-9) {
+        std::ostringstream os;
+        os << "reaches outside the ceiling ([" << lo.x() << ", " << lo.y() << "] .. [" << hi.x()
+           << ", " << hi.y() << "] m): corner (" << c.x() << ", " << c.y() << ")";
+        m.fail(where_key, os.str());
+      }
+    }
+  if (!drop_key.empty() && H - drop_m < kMinHangingHeightM - 1e-9) {
+    std::ostringstream os;
+    os << "hangs down to " << H - drop_m << " m above the floor, below the lowest allowed "
+       << kMinHangingHeightM << " m (ceiling " << H
+       << " m; ceiling items have no collision model)";
+    m.fail(drop_key, os.str());
+  }
+  b.w_.ceiling_items.push_back(item);
+}
+
 Pose2D parse_pose(Map& m, const std::string& key) {
   const auto v = m.nums(key, 3, true);
   return {v[0], v[1], v[2] * kDeg};
@@ -470,6 +623,21 @@ Pose2D parse_pose(Map& m, const std::string& key) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
+
+const char* to_string(CeilingItemKind kind) {
+  for (const CeilingKindName& k : kCeilingKinds)
+    if (k.kind == kind) return k.name;
+  return "?";
+}
+
+CeilingItemKind ceiling_item_kind_from_string(const std::string& name) {
+  std::string known;
+  for (const CeilingKindName& k : kCeilingKinds) {
+    if (name == k.name) return k.kind;
+    known += (known.empty() ? "" : ", ") + std::string(k.name);
+  }
+  throw std::invalid_argument("unknown ceiling item kind '" + name + "' (known: " + known + ")");
+}
 
 std::array<Eigen::Vector2d, 4> BoxObstacle::corners_m() const {
   const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
@@ -722,6 +890,13 @@ World parse_world(const std::string& yaml_text, const std::string& source_name,
     b.add(b.quad({lo.x(), lo.y(), w.ceiling_height_m}, Eigen::Vector3d::UnitX(),
                  Eigen::Vector3d::UnitY(), hi.x() - lo.x(), hi.y() - lo.y(), cs, false, lo.x(),
                  lo.y()));
+    w.has_ceiling = true;
+  }
+  {
+    auto items = top.list("ceiling_items");
+    if (!items.empty() && !ceiling)
+      top.fail("ceiling_items", "ceiling items need a `ceiling:` to hang from");
+    for (Map& m : items) parse_ceiling_item(b, m, lo, hi, w.ceiling_height_m);
   }
 
   for (Map& m : top.list("boxes")) {
@@ -875,7 +1050,14 @@ std::string summary(const World& w) {
      << w.max_m.y() << "] m, ceiling " << w.ceiling_height_m << " m\n";
   os << "  " << w.quads.size() << " quads, " << w.textures.size() << " textures, " << w.walls.size()
      << " wall segments, " << w.boxes.size() << " box obstacles, " << w.people.size()
-     << " moving obstacles\n";
+     << " moving obstacles";
+  if (!w.ceiling_items.empty()) {
+    std::map<std::string, int> count;
+    for (const CeilingItem& c : w.ceiling_items) ++count[to_string(c.kind)];
+    os << ", ceiling items:";
+    for (const auto& [kind, n] : count) os << " " << n << " " << kind;
+  }
+  os << "\n";
   for (const auto& [name, l] : w.lighting)
     os << "  lighting '" << name << "': ambient " << l.ambient << ", windows " << l.windows
        << ", lamps " << l.lamps << "\n";

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -272,6 +273,7 @@ struct Draft {
   bool poor_view = false;
   bool end_blank = false;
   std::vector<std::pair<Vec2, double>> doorways;  // centre, heading of the tour through it
+  std::vector<std::string> ceiling_items;         // YAML flow mappings, one per fixture
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -943,6 +945,137 @@ void add_lamps(Draft& d) {
   }
 }
 
+// Ceiling fixtures (docs/mock_robot.md "Ceiling items"): what makes a ceiling something a
+// pitched-up camera can localise on (issue 24). Drawn with their own generator after the attempt
+// passed its checks, so the rest of a seed's world is what it was before they existed; nothing
+// here changes the tour or its clearances (whatever hangs stays above 2 m).
+constexpr double kCeilingTileM = 0.6;  // the ceiling texture's tile (its grid starts at 0, 0)
+// Places drawn per fixture before giving it up: a narrow corridor has little room beside its lamps.
+constexpr int kCeilingTries = 20;
+
+double wall_distance(const Draft& d, const Vec2& p) {
+  double dist = 1e9;
+  for (const Wall& w : d.walls)
+    for (size_t i = 1; i < w.pts.size(); ++i)
+      dist = std::min(dist, dist_point_segment(p, w.pts[i - 1], w.pts[i]));
+  return dist;
+}
+
+// Centre of the ceiling tile that holds p.
+Vec2 tile_centre(const Vec2& p) {
+  return {(std::floor(p.x() / kCeilingTileM) + 0.5) * kCeilingTileM,
+          (std::floor(p.y() / kCeilingTileM) + 0.5) * kCeilingTileM};
+}
+
+void add_ceiling_items(Draft& d, Rng& rng) {
+  struct Disc {
+    Vec2 c;
+    double r;
+  };
+  std::vector<Disc> taken;  // flat fixtures and lamps must not overlap (one would hide the other)
+  for (const Lamp& l : d.lamps) taken.push_back({l.c, 0.5 * l.size_m.norm()});
+  auto free_at = [&](const Vec2& c, double r) {
+    if (wall_distance(d, c) < r + 0.05) return false;
+    for (const Disc& t : taken)
+      if ((t.c - c).norm() < t.r + r + 0.05) return false;
+    return true;
+  };
+  const double H = d.ceiling_m;
+  auto flat = [&](const char* kind, const Vec2& c, const Vec2& size, double yaw_deg,
+                  const std::string& texture) {
+    const double r = 0.5 * size.norm();
+    if (!free_at(c, r)) return false;
+    taken.push_back({c, r});
+    d.ceiling_items.push_back(std::string("{kind: ") + kind + ", center: " + pt(c) +
+                              ", size_m: " + pt(size) + ", yaw_deg: " + num(yaw_deg) +
+                              ", texture: " + texture + "}");
+    return true;
+  };
+  auto small = [&](const char* kind, const Vec2& c, const std::string& texture) {
+    const double r = std::string(kind) == "sprinkler" ? 0.05 : 0.09;
+    if (!free_at(c, r)) return false;
+    taken.push_back({c, r});
+    d.ceiling_items.push_back(std::string("{kind: ") + kind + ", center: " + pt(c) +
+                              ", texture: " + texture + "}");
+    return true;
+  };
+  static const std::vector<std::string> kTileTextures{"ceiling_plenum", "ceiling_stained",
+                                                      "ceiling_new"};
+  // Sprinklers about one per 3 m^2, a detector per 12 m^2, a vent per 8 m^2, an odd tile per
+  // 6 m^2: drawn where they fit, at random places, so no two stretches of ceiling look alike.
+  auto fill = [&](const std::function<Vec2()>& draw, double area_m2) {
+    for (int i = 0, n = static_cast<int>(area_m2 / 3.0) + 1; i < n; ++i)
+      for (int tries = 0; tries < kCeilingTries && !small("sprinkler", draw(), "ceiling_metal"); ++tries) {}
+    for (int i = 0, n = static_cast<int>(area_m2 / 12.0) + 1; i < n; ++i)
+      for (int tries = 0; tries < kCeilingTries && !small("detector", draw(), "ceiling_white"); ++tries) {}
+    for (int i = 0, n = static_cast<int>(area_m2 / 8.0) + 1; i < n; ++i) {
+      const bool square = rng.chance(0.5);
+      const Vec2 size = square ? Vec2(0.6, 0.6) : Vec2(rng.uniform(0.6, 1.2), 0.3);
+      const double yaw = rng.chance(0.5) ? 0.0 : 90.0;
+      for (int tries = 0; tries < kCeilingTries; ++tries)
+        if (flat("vent", draw(), size, yaw, square ? "ceiling_grille" : "ceiling_vent")) break;
+    }
+    for (int i = 0, n = static_cast<int>(area_m2 / 6.0) + 1; i < n; ++i) {
+      const std::string& tex = rng.pick(kTileTextures);
+      for (int tries = 0; tries < kCeilingTries; ++tries)
+        if (flat("tile", tile_centre(draw()), {kCeilingTileM, kCeilingTileM}, 0.0, tex)) break;
+    }
+  };
+  for (const Room& r : d.rooms) {
+    // Half of the rooms have a beam across their shorter side, between two rows of lamps.
+    const bool along_v = r.u1 - r.u0 > r.v1 - r.v0;
+    if (rng.chance(0.5)) {
+      const double lo = along_v ? r.u0 : r.v0, hi = along_v ? r.u1 : r.v1;
+      const double at = std::clamp(lo + 2.75 + 2.5 * rng.integer(0, 2), lo + 1.0, hi - 1.0);
+      const Vec2 a = along_v ? r.to_world(at, r.v0) : r.to_world(r.u0, at);
+      const Vec2 b = along_v ? r.to_world(at, r.v1) : r.to_world(r.u1, at);
+      const double width = rng.uniform(0.2, 0.35);
+      d.ceiling_items.push_back("{kind: beam, from: " + pt(a) + ", to: " + pt(b) +
+                                ", width_m: " + num(width) + ", depth_m: " +
+                                num(rng.uniform(0.15, 0.3)) + ", texture: ceiling_beam}");
+      for (double s = 0.0; s <= 1.0; s += 0.05) taken.push_back({a + s * (b - a), width / 2});
+    }
+    fill([&] { return r.to_world(rng.uniform(r.u0 + 0.3, r.u1 - 0.3),
+                                 rng.uniform(r.v0 + 0.3, r.v1 - 0.3)); },
+         (r.u1 - r.u0) * (r.v1 - r.v0));
+  }
+  if (d.corridor_width_m > 0.0) {
+    // Along the tour's parts in the corridor, within its width.
+    std::vector<Vec2> corridor;
+    for (const Vec2& p : samples(d.path, 0.25)) {
+      bool in_room = false;
+      for (const Room& r : d.rooms) in_room |= r.inside(p, -0.2);
+      if (!in_room) corridor.push_back(p);
+    }
+    if (!corridor.empty()) {
+      // A point near a centre-line sample, kept only within the half width (less 0.2 m) of the
+      // centre line: beyond it lies a wall, a partition or the space outside.
+      const double half = d.corridor_width_m / 2 - 0.2;
+      auto draw = [&] {
+        const int last = static_cast<int>(corridor.size()) - 1;
+        for (;;) {
+          const Vec2 p = corridor[static_cast<size_t>(rng.integer(0, last))] +
+                         Vec2(rng.uniform(-half, half), rng.uniform(-half, half));
+          double to_centre = 1e9;
+          for (const Vec2& q : corridor) to_centre = std::min(to_centre, (q - p).norm());
+          if (to_centre <= half) return p;
+        }
+      };
+      fill(draw, 0.25 * static_cast<double>(corridor.size()) * d.corridor_width_m);
+    }
+  }
+  // An exit sign over each doorway, on the side the tour comes from, facing it: the forward view
+  // sees it on the way in.
+  for (const auto& [c, heading] : d.doorways) {
+    const Vec2 at = c - 0.3 * dir(heading);
+    const double drop = rng.uniform(0.1, 0.2);
+    if (H - drop - 0.2 < 2.05) continue;
+    d.ceiling_items.push_back("{kind: sign, center: " + pt(at) + ", yaw_deg: " +
+                              num(heading / kDeg + 180.0) + ", size_m: [0.4, 0.2], drop_m: " +
+                              num(drop) + ", texture: ceiling_sign}");
+  }
+}
+
 // The replay starts (teach start, +-0.1 m to the side) keep a perturbed 0.3 m robot clear; the
 // tour does not pass near its own end before it gets there (the teach drive would stop early).
 void check_tour_and_starts(const Draft& d, const Obstacles& o) {
@@ -996,8 +1129,11 @@ std::string textures_yaml(Rng& rng, const std::string& dir, int size_px) {
     os << "  floor: {type: noise, mean: " << num(rng.uniform(110, 145))
        << ", contrast: " << num(rng.uniform(14, 22)) << ", feature_px: 20, seed: " << seed()
        << "}\n";
-  os << "  ceiling: {type: tiles, cells: 4, mean: " << num(rng.uniform(198, 215))
-     << ", contrast: 26, seed: " << seed() << "}\n";
+  // 16 x 16 tiles of 0.6 m per repetition (ceiling tile_m 9.6), each its own grey: not periodic
+  // along a room (ceiling mode), four times the other textures' side for the tile's detail.
+  os << "  ceiling: {type: tiles, cells: 16, mean: " << num(rng.uniform(198, 215))
+     << ", contrast: 26, seed: " << seed()
+     << ", size_px: " << std::min(1024, 4 * size_px) << "}\n";
   os << "  paint: {type: noise, mean: " << num(rng.uniform(170, 200))
      << ", contrast: " << num(rng.uniform(6, 12)) << ", feature_px: 40, seed: " << seed() << "}\n";
   os << "  paint_b: {type: noise, mean: " << num(rng.uniform(160, 195))
@@ -1029,6 +1165,17 @@ std::string textures_yaml(Rng& rng, const std::string& dir, int size_px) {
   os << "  board: {type: checker, cells: 6, mean: 150, contrast: 25}\n";
   os << "  notices: {type: books, rows: 4, mean: 170, contrast: 40, seed: " << seed() << "}\n";
   os << "  lamp: {type: uniform, mean: 250}\n";
+  // Ceiling fixtures: fixed looks (their places are what is drawn), so the other textures' draws
+  // are what they were before the fixtures existed.
+  os << "  ceiling_vent: {type: stripes, mean: 120, contrast: 45, cells: 14, seed: 4}\n";
+  os << "  ceiling_grille: {type: checker, mean: 150, contrast: 40, cells: 6}\n";
+  os << "  ceiling_stained: {type: noise, mean: 160, contrast: 35, feature_px: 48, seed: 6}\n";
+  os << "  ceiling_new: {type: noise, mean: 232, contrast: 6, feature_px: 40, seed: 7}\n";
+  os << "  ceiling_plenum: {type: noise, mean: 45, contrast: 20, feature_px: 24, seed: 8}\n";
+  os << "  ceiling_metal: {type: uniform, mean: 80}\n";
+  os << "  ceiling_white: {type: uniform, mean: 240}\n";
+  os << "  ceiling_beam: {type: noise, mean: 170, contrast: 18, feature_px: 24, seed: 9}\n";
+  os << "  ceiling_sign: {type: checker, mean: 130, contrast: 95, cells: 2}\n";
   const std::string base = dir.empty() || dir.back() == '/' ? dir : dir + "/";
   for (const auto& [name, file] : std::vector<std::pair<const char*, const char*>>{
            {"pepper_a", "pepper_office_a.jpg"},
@@ -1045,7 +1192,7 @@ std::string textures_yaml(Rng& rng, const std::string& dir, int size_px) {
   std::istringstream in(os.str());
   std::ostringstream out;
   for (std::string line; std::getline(in, line);) {
-    if (line.size() > 2 && line.back() == '}') {
+    if (line.size() > 2 && line.back() == '}' && line.find("size_px") == std::string::npos) {
       line.pop_back();
       const bool image = line.find("type: image") != std::string::npos;
       line += (image ? ", max_size_px: " : ", size_px: ") + std::to_string(size_px) + "}";
@@ -1070,7 +1217,8 @@ std::string to_yaml(const Draft& d, const GeneratedWorld& g, const std::string& 
      << "  replay: {ambient: 0.95, windows: 1.1, lamps: 1.0}\n\n";
   os << textures << "\n";
   os << "floor: {texture: floor, tile_m: [2.0, 2.0]}\n";
-  os << "ceiling: {height_m: " << num(d.ceiling_m) << ", texture: ceiling, tile_m: [2.4, 2.4]}\n\n";
+  os << "ceiling: {height_m: " << num(d.ceiling_m) << ", texture: ceiling, tile_m: ["
+     << num(16 * kCeilingTileM) << ", " << num(16 * kCeilingTileM) << "]}\n\n";
   os << "walls:\n";
   for (const Wall& w : d.walls) {
     os << "  - points: [";
@@ -1139,6 +1287,10 @@ std::string to_yaml(const Draft& d, const GeneratedWorld& g, const std::string& 
     os << "\nlamps:\n";
     for (const Lamp& l : d.lamps)
       os << "  - {center: " << pt(l.c) << ", size_m: " << pt(l.size_m) << ", texture: lamp}\n";
+  }
+  if (!d.ceiling_items.empty()) {
+    os << "\nceiling_items:\n";
+    for (const std::string& item : d.ceiling_items) os << "  - " << item << "\n";
   }
   os << "\nteach:\n  waypoints: [";
   for (size_t i = 0; i < d.path.size(); ++i) os << (i ? ", " : "") << pt(d.path[i]);
@@ -1261,6 +1413,8 @@ GeneratedWorld generate_world(const WorldGeneratorOptions& options) {
         throw Reject{"the teach drive passes too close"};
       for (size_t i = 1; i < d.path.size(); ++i) g.path_length_m += (d.path[i] - d.path[i - 1]).norm();
       const std::string textures = textures_yaml(rng, options.texture_dir, options.texture_size_px);
+      Rng ceiling_rng(options.seed * 0x94D049BB133111EBULL + static_cast<uint64_t>(attempt));
+      add_ceiling_items(d, ceiling_rng);
       g.yaml = to_yaml(d, g, textures);
       return g;
     } catch (const Reject& r) {

@@ -76,6 +76,7 @@ TEST(WorldGenerator, RejectsBadOptionsAndKinds) {
 // loads its worlds at full size.
 TEST(WorldGenerator, TwoHundredSeedsLoadRenderAndKeepTheTourClear) {
   std::map<std::string, int> turn_kinds;  // "spot 90", "arc 180", ...
+  std::map<CeilingItemKind, int> ceiling_kinds;
   int blank_turns = 0, turns = 0, poor = 0;
   double min_len = 1e9;
   MockRobotOptions options = test::small_fast();
@@ -96,6 +97,14 @@ TEST(WorldGenerator, TwoHundredSeedsLoadRenderAndKeepTheTourClear) {
       }
     }
     ASSERT_EQ(w.scenario.replay_starts.size(), 3u);
+    // A ceiling with fixtures (issue 24): every world has sprinklers, detectors and vents.
+    EXPECT_TRUE(w.has_ceiling);
+    std::map<CeilingItemKind, int> items;
+    for (const CeilingItem& c : w.ceiling_items) ++items[c.kind];
+    for (CeilingItemKind k :
+         {CeilingItemKind::kSprinkler, CeilingItemKind::kDetector, CeilingItemKind::kVent})
+      EXPECT_GT(items[k], 0) << to_string(k);
+    for (const auto& [k, n] : items) ceiling_kinds[k] += n;
     // The start view: neither black nor washed out, and textured (not one flat wall).
     auto shared = std::make_shared<const World>(std::move(w));
     MockRobot robot(shared, options);
@@ -124,6 +133,8 @@ TEST(WorldGenerator, TwoHundredSeedsLoadRenderAndKeepTheTourClear) {
   EXPECT_LT(poor, 120);
   EXPECT_GT(blank_turns, turns / 4);
   EXPECT_LT(blank_turns, turns);
+  for (CeilingItemKind k : {CeilingItemKind::kTile, CeilingItemKind::kBeam, CeilingItemKind::kSign})
+    EXPECT_GT(ceiling_kinds[k], 0) << to_string(k);
 }
 
 // A few seeds of each kind taught with the scripted drive on the mock robot: no collision, the

@@ -101,6 +101,33 @@ struct MovingObstacle {
   Eigen::Vector3d pose_at(double t_s) const;
 };
 
+/// What a ceiling fixture is (YAML `ceiling_items[i].kind`, ceiling_item_kind_from_string).
+enum class CeilingItemKind {
+  kVent,       ///< grille: a textured rectangle just under the ceiling
+  kTile,       ///< one replaced, stained or missing ceiling tile: a rectangle under the ceiling
+  kSprinkler,  ///< small square head (6 cm) a few cm proud of the ceiling
+  kDetector,   ///< smoke detector: a larger square (12 cm) a few cm proud
+  kBeam,       ///< a box hanging below the ceiling between two points (seen from below and side)
+  kSign,       ///< exit sign: a thin box hanging on two rods (seen from the forward view too)
+};
+
+const char* to_string(CeilingItemKind kind);
+/// Throws std::invalid_argument listing the valid names when `name` is unknown.
+CeilingItemKind ceiling_item_kind_from_string(const std::string& name);
+
+/// A ceiling fixture as placed (its render quads are in World::quads): an oriented box whose
+/// footprint is centred on center_m, size_m.x() along yaw_rad and size_m.y() across it, from
+/// z_bottom_m up to z_top_m (flat kinds: both a few millimetres under the ceiling).
+struct CeilingItem {
+  CeilingItemKind kind = CeilingItemKind::kVent;
+  std::string what;  ///< name, or e.g. "ceiling_items[3]"
+  Eigen::Vector2d center_m = Eigen::Vector2d::Zero();
+  Eigen::Vector2d size_m = Eigen::Vector2d::Zero();
+  double yaw_rad = 0.0;
+  double z_bottom_m = 0.0;
+  double z_top_m = 0.0;
+};
+
 /// A 2D pose in the world frame.
 struct Pose2D {
   double x_m = 0.0;
@@ -151,6 +178,8 @@ struct World {
   Eigen::Vector2d min_m = Eigen::Vector2d::Zero();  ///< bounds of the floor
   Eigen::Vector2d max_m = Eigen::Vector2d::Zero();
   double ceiling_height_m = 2.6;
+  bool has_ceiling = false;                ///< the file has a `ceiling:` (else nothing is drawn)
+  std::vector<CeilingItem> ceiling_items;  ///< fixtures under the ceiling, in file order
   Scenario scenario;
 
   /// Lighting condition by name; throws WorldError listing the known names.
