@@ -104,10 +104,13 @@ int run_evaluate(const EvaluateArgs& a) {
     const AppConfig config = load_app_config(sources);
     const core::NavMode mode = parse_mode(a.mode);
     o.mode = mode;
+    o.ceiling = config.ceiling_navigator_options();
     if (mode == core::NavMode::kCeiling && (a.compare_features || a.features != "both")) {
-      throw ConfigError(
-          "--compare-features and --features choose the forward mode's features: drop them "
-          "with --mode ceiling (it navigates by the ceiling mosaic's landmarks)");
+      // A usage error, not a configuration value: std::invalid_argument adds no --set advice.
+      throw std::invalid_argument(
+          (a.compare_features ? std::string("--compare-features") : "--features " + a.features) +
+          " chooses the forward mode's features: drop it with --mode ceiling (it navigates by the "
+          "ceiling mosaic's landmarks)");
     }
     o.navigator = config.navigator_options();
     o.key_images = config.teach_options().selector;

@@ -132,7 +132,9 @@ int run_replay(const ReplayArgs& a) {
     // Ceiling mode: the ceiling navigator steps the same replay loop (ceiling_replay.hpp).
     StepFunction step;
     if (mode == core::NavMode::kCeiling) {
-      step = make_ceiling_replay(*robot.mock, a.map, map, o.head.head_pitch_rad).step;
+      step = make_ceiling_replay(*robot.mock, a.map, map, o.head.head_pitch_rad,
+                                 config.ceiling_navigator_options())
+                 .step;
     }
     const ReplayResult r = run_replay_session(robot, std::move(map), o, link, step);
     if (!a.mock_command_log.empty() && robot.mock) {
