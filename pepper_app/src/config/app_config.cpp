@@ -7,6 +7,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "config/parameters.hpp"
+#include "core/ceiling/ceiling_navigator.hpp"
 
 namespace pepper::app {
 namespace {

@@ -25,9 +25,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/ceiling/ceiling_navigator.hpp"
 #include "core/mapping/teacher.hpp"
 #include "core/navigator/navigator.hpp"
+
+namespace pepper::core::ceiling {
+struct CeilingNavigatorOptions;  // core/ceiling/ceiling_navigator.hpp
+}  // namespace pepper::core::ceiling
 
 namespace pepper::app {
 

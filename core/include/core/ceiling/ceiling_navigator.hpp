@@ -92,7 +92,10 @@ struct CeilingTelemetry {
 };
 
 struct CeilingStepResult {
-  navigator::StepResult step;  ///< command; telemetry: see ceiling_navigator.cpp fill-in
+  /// The command, and the forward Telemetry's fields where they mean the same: ip / in / inn are
+  /// relay indices, n_points_next the localiser's inliers, vnhv_* the deviation from the
+  /// segment, dead_reckoned_m the coasted distance (docs/method/ceiling.md "Replay").
+  navigator::StepResult step;
   CeilingTelemetry ceiling;
 };
 
