@@ -73,7 +73,7 @@ struct CeilingNavigatorOptions {
   /// Coasting on odometry without a fix: at most this far, m, >= 0 (0: stop at once), and this
   /// long, s, >= 0, since the last fix. Why 0.3 m: odometry drifts ~2 % of the distance and a
   /// degree or two per turn, so 0.3 m stay within about a centimetre of where a fix would put
-  /// the robot, and a person walking under the camera hides it for well under a metre.
+  /// the robot: coasting bridges short losses, it is not blind driving.
   double coast_max_m = 0.3;
   double coast_max_s = 2.0;
 
