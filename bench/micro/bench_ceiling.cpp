@@ -1,6 +1,7 @@
 // Ceiling-mode per-frame cost at QVGA on one core (issue 24 target: <= 10 ms per frame): the
 // canonical warp, landmark extraction (ORB + sub-pixel), the mosaic builder's step during teach,
-// and the localiser with and without a prior. Frames: 32 renders of tests/worlds/ceiling_hall.yaml
+// the localiser with and without a prior, and the replay's whole step (CeilingNavigator::step:
+// warp, landmarks, localisation with a prior, law). Frames: 32 renders of tests/worlds/ceiling_hall.yaml
 // along a straight 2 m drive with the head at -0.7 rad (rendered once, outside the timing).
 //
 //   taskset -c 0 build/bench/bench_ceiling --benchmark_repetitions=3
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "core/ceiling/canonical_view.hpp"
+#include "core/ceiling/ceiling_navigator.hpp"
 #include "core/ceiling/landmarks.hpp"
 #include "core/ceiling/mosaic_builder.hpp"
 #include "core/ceiling/mosaic_localiser.hpp"
@@ -33,6 +35,7 @@ struct Fixture {
   std::vector<cv::Mat> images;
   std::vector<ceiling::CeilingObservation> observations;
   ceiling::Mosaic mosaic;
+  ceiling::CeilingTour tour;  ///< the 2 m drive's first and last frames as relay images
 };
 
 ceiling::CeilingObservation observe(const Fixture& f, const cv::Mat& image) {
@@ -69,6 +72,13 @@ const Fixture& fixture() {
     }
     robot.stop_move();
     out->mosaic = builder.mosaic();
+    out->tour.frames = 120;
+    for (const size_t k : {size_t{0}, size_t{119}}) {
+      ceiling::RelayImageRecord r;
+      r.frame = static_cast<int64_t>(k);
+      r.T_mosaic_base = builder.frames()[k].T_mosaic_base;
+      out->tour.relay_images.push_back(r);
+    }
     return out;
   }();
   return *f;
@@ -128,6 +138,31 @@ void BM_CeilingLocaliseWithPrior(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_CeilingLocaliseWithPrior)->Unit(benchmark::kMillisecond);
+
+void BM_CeilingNavigatorStep(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const auto make = [&f] {
+    return std::make_unique<ceiling::CeilingNavigator>(f.mosaic, f.tour, f.view->camera(),
+                                                       f.cam_in_base_m);
+  };
+  auto nav = make();
+  size_t k = 0;
+  for (auto _ : state) {
+    if (k == f.images.size()) {  // a new replay, outside the timing
+      state.PauseTiming();
+      nav = make();
+      k = 0;
+      state.ResumeTiming();
+    }
+    pepper::core::Frame frame;
+    frame.gray = f.images[k];
+    frame.t_ns = static_cast<int64_t>(k) * 266'666'667;  // every 4th frame at 15 Hz
+    frame.index = static_cast<int64_t>(k++);
+    auto r = nav->step(frame);
+    benchmark::DoNotOptimize(r);
+  }
+}
+BENCHMARK(BM_CeilingNavigatorStep)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -63,6 +63,8 @@ const char* to_string(StopReason r) {
       return "tour_complete";
     case StopReason::kSegmentOverdue:
       return "segment_overdue";
+    case StopReason::kRelayBreak:
+      return "relay_break";
   }
   return "unknown";
 }

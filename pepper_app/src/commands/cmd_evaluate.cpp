@@ -38,7 +38,7 @@ struct EvaluateArgs {
   std::string size = "640x480";
   std::string lens = "none";            ///< --lens: none or pepper (the mock's lens)
   std::string lens_correction = "on";   ///< --lens-correction: on or off
-  std::string mode = "forward";  ///< --mode (core/nav_mode.hpp): only forward is implemented
+  std::string mode = "forward";  ///< --mode (core/nav_mode.hpp)
   double lateral_m = 0.3;
   double yaw_deg = 10.0;
   double along_m = -1.0;
@@ -103,7 +103,15 @@ int run_evaluate(const EvaluateArgs& a) {
     if (!a.controller.empty()) sources.sets.push_back("navigator.controller=" + a.controller);
     const AppConfig config = load_app_config(sources);
     const core::NavMode mode = parse_mode(a.mode);
-    refuse_unimplemented_mode(mode, "evaluate");
+    o.mode = mode;
+    o.ceiling = config.ceiling_navigator_options();
+    if (mode == core::NavMode::kCeiling && (a.compare_features || a.features != "both")) {
+      // A usage error, not a configuration value: std::invalid_argument adds no --set advice.
+      throw std::invalid_argument(
+          (a.compare_features ? std::string("--compare-features") : "--features " + a.features) +
+          " chooses the forward mode's features: drop it with --mode ceiling (it navigates by the "
+          "ceiling mosaic's landmarks)");
+    }
     o.navigator = config.navigator_options();
     o.key_images = config.teach_options().selector;
     o.head = head_request(config, mode);
@@ -152,6 +160,7 @@ int run_evaluate(const EvaluateArgs& a) {
       ev::EvaluationOptions mo = to;
       mo.features = mode;
       if (!mo.map_dir.empty()) mo.map_dir += ev::single_modality_tag(mode, "_");
+      if (!mo.map_dir.empty() && mo.mode == core::NavMode::kCeiling) mo.map_dir += "_ceiling";
       const ev::TeachResult teach = ev::teach_tour(world, mo, progress);
       if (!a.plots_dir.empty()) {
         strips.push_back({world->name + " (" + core::control::to_string(mode) + ")",

@@ -9,6 +9,7 @@
 #include "commands/commands.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "evaluation/closed_loop.hpp"
+#include "session/ceiling_replay.hpp"
 #include "session/console.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
@@ -51,7 +52,7 @@ int run_replay(const ReplayArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
     const core::NavMode mode = parse_mode(a.common.mode);
-    refuse_unimplemented_mode(mode, "replay");
+    refuse_ceiling_on_real_robot(mode, a.common.robot, "replay");  // before the map and robot
     core::memory::LoadOptions load;
     load.expected_mode = mode;  // a map of the other mode is refused, naming both
     core::memory::VisualMemory map = core::memory::load_map(a.map, load);
@@ -128,7 +129,14 @@ int run_replay(const ReplayArgs& a) {
     link.set_console(&console);
     console.line("replay: " + std::to_string(map.key_images.size()) + " key images from " + a.map +
                  " on " + robot.bridge->describe() + "; Ctrl-C (or STOP in the UI) stops the robot");
-    const ReplayResult r = run_replay_session(robot, std::move(map), o, link);
+    // Ceiling mode: the ceiling navigator steps the same replay loop (ceiling_replay.hpp).
+    StepFunction step;
+    if (mode == core::NavMode::kCeiling) {
+      step = make_ceiling_replay(*robot.mock, a.map, map, o.head.head_pitch_rad,
+                                 config.ceiling_navigator_options())
+                 .step;
+    }
+    const ReplayResult r = run_replay_session(robot, std::move(map), o, link, step);
     if (!a.mock_command_log.empty() && robot.mock) {
       std::ofstream out(a.mock_command_log);
       for (const auto& c : robot.mock->command_log()) {

@@ -90,13 +90,8 @@ int run_teach(const TeachArgs& a) {
     const AppConfig config = load_session_config(a.common);
     const core::NavMode mode = parse_mode(a.common.mode);
     RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
-    if (mode == core::NavMode::kCeiling && !robot.mock) {
-      // Refused (exit 2) before the old map is moved aside or anything connects.
-      throw ModeUnavailableError(
-          "teach --mode ceiling runs on mock: robots only for now: the ceiling's height above "
-          "the camera comes from the simulated world and is not configured or estimated on a "
-          "real robot yet (docs/method/ceiling.md)");
-    }
+    // Refused (exit 2) before the old map is moved aside or anything connects.
+    refuse_ceiling_on_real_robot(mode, a.common.robot, "teach");
     if (a.scripted && a.manual) return report_error(
           "--scripted and --manual exclude each other: drop one (--scripted drives the mock "
           "world's path, --manual drives from the UI)");

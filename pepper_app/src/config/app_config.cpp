@@ -7,6 +7,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "config/parameters.hpp"
+#include "core/ceiling/ceiling_navigator.hpp"
 
 namespace pepper::app {
 namespace {
@@ -123,6 +124,17 @@ core::navigator::NavigatorOptions AppConfig::navigator_options() const {
   n.matcher.klt = extractor.klt;
   n.matcher.essential.camera_pitch_rad = robot.head_pitch_rad;
   return n;
+}
+
+core::ceiling::CeilingNavigatorOptions AppConfig::ceiling_navigator_options() const {
+  core::ceiling::CeilingNavigatorOptions c;
+  c.vnhv = navigator.vnhv;
+  c.schedule = navigator.schedule;
+  c.arc_min_turn_rad = ceiling.arc_min_turn_rad;
+  c.turn_in_place_gain_1_s = ceiling.turn_in_place_gain_1_s;
+  c.coast_max_m = ceiling.coast_max_m;
+  c.coast_max_s = ceiling.coast_max_s;
+  return c;
 }
 
 std::vector<std::string> AppConfig::validate() const {

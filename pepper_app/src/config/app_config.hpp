@@ -28,6 +28,10 @@
 #include "core/mapping/teacher.hpp"
 #include "core/navigator/navigator.hpp"
 
+namespace pepper::core::ceiling {
+struct CeilingNavigatorOptions;  // core/ceiling/ceiling_navigator.hpp
+}  // namespace pepper::core::ceiling
+
 namespace pepper::app {
 
 class ConfigError : public std::runtime_error {
@@ -78,6 +82,16 @@ struct ReplayConfig {
   double arrival_tolerance_rad = 0.1;
 };
 
+/// Ceiling-mode replay (issue 24; core/ceiling/ceiling_navigator.hpp, docs/method/ceiling.md):
+/// what is its own. The law's gains and the speeds are the forward navigator's
+/// (navigator.vnhv.kp_1_m2, kd_1_m, max_abs_theta_rad; navigator.speed.*).
+struct CeilingConfig {
+  double arc_min_turn_rad = 0.1;        ///< relay segments turning more follow their arc
+  double turn_in_place_gain_1_s = 1.0;  ///< facing too far off the path: turn on the spot
+  double coast_max_m = 0.3;             ///< no fix: coast on odometry at most this far
+  double coast_max_s = 2.0;             ///< and this long
+};
+
 struct UiConfig {
   int port = 8080;               ///< 0 = any free port
   double max_v_m_s = 0.25;       ///< teach driving limits from the keyboard / buttons
@@ -91,10 +105,14 @@ struct AppConfig {
   core::navigator::NavigatorOptions navigator;  ///< its extractor/matcher come from the above
   RobotConfig robot;
   ReplayConfig replay;
+  CeilingConfig ceiling;
   UiConfig ui;
 
   core::mapping::TeachOptions teach_options() const;
   core::navigator::NavigatorOptions navigator_options() const;
+  /// The ceiling navigator's options: `ceiling`, with the forward navigator's VNHV gains and
+  /// speed schedule.
+  core::ceiling::CeilingNavigatorOptions ceiling_navigator_options() const;
 
   /// Every problem, each naming the dotted key; empty when valid. The ranges of the parameter
   /// table first (check_ranges); only when they hold, the rules between fields of the core's

@@ -228,6 +228,7 @@ std::vector<Parameter> build_table() {
       section("navigator.switching", [](auto& c) -> auto& { return c.navigator.switching; });
   const auto robot = section("robot", [](auto& c) -> auto& { return c.robot; });
   const auto replay = section("replay", [](auto& c) -> auto& { return c.replay; });
+  const auto ceiling = section("ceiling", [](auto& c) -> auto& { return c.ceiling; });
   const auto ui = section("ui", [](auto& c) -> auto& { return c.ui; });
 
   return {
@@ -716,6 +717,21 @@ std::vector<Parameter> build_table() {
         replay, &ReplayConfig::arrival_tolerance_rad, "rad", "(0, 1]",
         "end of tour: arrived when the estimated heading error is within this"),
 
+    // ceiling: CeilingConfig (ceiling-mode replay, core/ceiling/ceiling_navigator.hpp; its law's
+    // gains and speeds are navigator.vnhv.* and navigator.speed.*)
+    row("ceiling.arc_min_turn_rad",
+        ceiling, &CeilingConfig::arc_min_turn_rad, "rad", "[0, inf)",
+        "relay segments turning more than this follow their arc, the others their chord"),
+    row("ceiling.turn_in_place_gain_1_s",
+        ceiling, &CeilingConfig::turn_in_place_gain_1_s, "1/s", "(0, 5]",
+        "heading beyond navigator.vnhv.max_abs_theta_rad: turn on the spot at this gain"),
+    row("ceiling.coast_max_m",
+        ceiling, &CeilingConfig::coast_max_m, "m", "[0, 2]",
+        "no fix against the mosaic: drive on odometry at most this far, then stop (0: stop)"),
+    row("ceiling.coast_max_s",
+        ceiling, &CeilingConfig::coast_max_s, "s", "[0, 10]",
+        "and at most this long since the last fix"),
+
     // ui: UiConfig
     row("ui.port",
         ui, &UiConfig::port, "", "0 (any free port) or [1, 65535]",
@@ -986,6 +1002,10 @@ const std::vector<std::pair<std::string, std::string>>& section_docs() {
       {"navigator.switching", "When to switch to the next key image."},
       {"robot", "Camera request, head lock, safety timeouts, login user."},
       {"replay", "When a replay that cannot go on gives up."},
+      {"ceiling",
+       "Ceiling-mode replay (`--mode ceiling`, docs/method/ceiling.md): the reference between "
+       "relay images and what happens without a fix against the mosaic. The law's gains and the "
+       "speeds are `navigator.vnhv.*` and `navigator.speed.*`."},
       {"ui", "Teach UI port and driving limits."},
   };
   return docs;

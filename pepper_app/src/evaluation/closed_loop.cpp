@@ -15,6 +15,7 @@
 
 #include "evaluation/metrics.hpp"
 #include "naoqi_bridge/mock_bridge.hpp"
+#include "session/ceiling_replay.hpp"
 #include "session/robot_connection.hpp"
 #include "session/session_link.hpp"
 #include "session/teach_session.hpp"
@@ -99,7 +100,8 @@ TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
                           ("pepper_eval_map_" + world->name + "_" +
                            std::to_string(options.width_px) + "x" +
                            std::to_string(options.height_px) +
-                           single_modality_tag(options.features, "_") + "_" +
+                           single_modality_tag(options.features, "_") +
+                           (options.mode == core::NavMode::kCeiling ? "_ceiling" : "") + "_" +
                            std::to_string(::getpid()))
                     : options.map_dir;
 
@@ -114,6 +116,7 @@ TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
   so.camera = camera_request(options);
   so.camera_model = app_camera_model(options);
   so.head = options.head;
+  so.mode = options.mode;
   so.teach.selector = options.key_images;
   so.teach.extractor = options.navigator.extractor;
   // A single-modality evaluation teaches with that modality too (the paper's "lines only" and
@@ -137,7 +140,9 @@ TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
   if (taught.frames_recorded >= so.max_frames) {
     throw std::runtime_error("teach drive did not finish in time");
   }
-  out.map = core::memory::load_map(out.map_dir);
+  core::memory::LoadOptions load;
+  load.expected_mode = options.mode;
+  out.map = core::memory::load_map(out.map_dir, load);
   out.path_m = taught.path_m;
   out.key_m = taught.key_m;
   out.frames = static_cast<int>(taught.frames_recorded);
@@ -430,7 +435,13 @@ RunResult replay_run(const TeachResult& teach,
   so.monitor = &monitor;
   SessionLink link(nullptr, nullptr);
   // The replay loop users run (`replay`, `demo`): its decisions are what is scored here.
-  const ReplayResult replayed = run_replay_session(robot, teach.map, so, link);
+  StepFunction step;  // ceiling mode: the ceiling navigator steps the same loop
+  if (options.mode == core::NavMode::kCeiling) {
+    step = make_ceiling_replay(*robot.mock, teach.map_dir, teach.map, options.head.head_pitch_rad,
+                               options.ceiling)
+               .step;
+  }
+  const ReplayResult replayed = run_replay_session(robot, teach.map, so, link, step);
   r.tour_complete = replayed.tour_complete;
   if (replayed.tour_complete) {
     r.arrival_verdict = replayed.arrival.verdict;
@@ -550,8 +561,10 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
   }
   Evaluation ev;
   ev.world_name = world->name;
-  ev.features = feature_label(options.features);
-  ev.controller = core::navigator::to_string(options.navigator.controller);
+  ev.mode = core::to_string(options.mode);
+  const bool ceiling = options.mode == core::NavMode::kCeiling;
+  ev.features = ceiling ? "ceiling" : feature_label(options.features);
+  ev.controller = ceiling ? "vnhv" : core::navigator::to_string(options.navigator.controller);
   ev.size = std::to_string(options.width_px) + "x" + std::to_string(options.height_px);
   ev.lens = lens_label(options);
   for (Disturbance d : options.disturbances) ev.disturbances.push_back(to_string(d));

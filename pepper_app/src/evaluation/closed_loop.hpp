@@ -36,9 +36,11 @@
 
 #include <Eigen/Core>
 
+#include "core/ceiling/ceiling_navigator.hpp"
 #include "core/control/ibvs_law.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "core/mapping/key_image_selector.hpp"
+#include "core/nav_mode.hpp"
 #include "core/navigator/navigator.hpp"
 #include "evaluation/disturbance.hpp"
 #include "naoqi_bridge/mock_bridge.hpp"
@@ -67,6 +69,11 @@ struct EvaluationOptions {
   /// features are undistorted (core/camera/distortion.hpp); false, the app takes the pinhole
   /// calibration pepper_top_vga() of the same camera whatever the lens (no correction).
   bool correct_lens = true;
+  /// forward: the forward-looking method; ceiling (issue 24): teach builds the ceiling mosaic
+  /// (head at `head`'s pitch, the caller's ceiling pitch) and the replay runs the ceiling
+  /// navigator (session/ceiling_replay.hpp) in the same replay loop; `features` does not apply.
+  core::NavMode mode = core::NavMode::kForward;
+  core::ceiling::CeilingNavigatorOptions ceiling;  ///< ceiling mode's replay
   /// Lines, points or both: teach (key-image selection) and replay match only these.
   core::control::FeatureMode features = core::control::FeatureMode::kLinesAndPoints;
   /// Start perturbations (uniform, +-): replaces the world's own ranges. The start of run k is
@@ -204,7 +211,8 @@ struct Summary {
 
 struct Evaluation {
   std::string world_name;
-  std::string features;      ///< "lines+points", "lines", "points"
+  std::string mode;          ///< "forward", "ceiling"
+  std::string features;      ///< "lines+points", "lines", "points"; "ceiling" in ceiling mode
   std::string controller;    ///< "ibvs", "vnhv"
   std::string size;          ///< "640x480"
   std::string lens;          ///< lens_label(): "none", "pepper", "pepper uncorrected"

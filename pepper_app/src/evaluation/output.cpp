@@ -97,6 +97,7 @@ json to_json(const std::vector<Evaluation>& evaluations) {
     json runs = json::array();
     for (const RunResult& r : e.runs) runs.push_back(run_json(r));
     list.push_back({{"world", e.world_name},
+                    {"mode", e.mode},
                     {"features", e.features},
                     {"controller", e.controller},
                     {"size", e.size},

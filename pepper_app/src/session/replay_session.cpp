@@ -504,6 +504,15 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         end_with("tour_complete", arrival_detail(result.arrival));
         break;
       }
+      if (c.stop && c.reason == nav::StopReason::kRelayBreak) {
+        // Ceiling mode: the next relay segment was taught without a landmark linking its relay
+        // images (the teach lost the ceiling there); the navigator stops for good.
+        end_with("relay_break",
+                 "the taught relay chain breaks after relay image " + std::to_string(t.ip) +
+                     " (the teach lost the ceiling there, `map info` lists the breaks): stopped; "
+                     "teach the tour again with the ceiling in view");
+        break;
+      }
       if (t.state == nav::NavState::kOverdue) {
         end_with("overdue", "no key-image switch after key image " + std::to_string(t.ip) +
                                 " for far longer than teaching took: stopped, unsure where the "

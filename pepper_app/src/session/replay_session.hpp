@@ -126,7 +126,7 @@ Arrival judge_arrival(const core::navigator::Telemetry& final_frame, double tole
 struct ReplayResult {
   std::string outcome;  ///< tour_complete, interrupted, ui_stop, frame_timeout, connection_lost,
                         ///< error, max_frames, lost, not_localised, overdue, collision (mock),
-                        ///< head_lock_lost,
+                        ///< head_lock_lost, relay_break (ceiling mode),
                         ///< or a ReplayMonitor's outcome
   std::string detail;   ///< one sentence on why it ended
   std::string error;

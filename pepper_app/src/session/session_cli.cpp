@@ -37,8 +37,8 @@ void add_common_session_options(CLI::App* cmd, CommonSessionArgs& args, bool wit
 void add_mode_option(CLI::App* cmd, std::string& mode) {
   cmd->add_option("--mode", mode,
                   "What the robot navigates by: forward (the camera looking ahead) or ceiling "
-                  "(the camera looking up, docs/method/ceiling.md; teach only for now: "
-                  "replay, demo and evaluate refuse it)")
+                  "(the camera looking up, docs/method/ceiling.md; mock: robots only for "
+                  "now; demo refuses it)")
       ->check(CLI::IsMember({"forward", "ceiling"}))
       ->capture_default_str();
 }
@@ -51,15 +51,24 @@ core::NavMode parse_mode(const std::string& text) {
 
 void refuse_unimplemented_mode(core::NavMode mode, const std::string& command) {
   if (mode == core::NavMode::kForward) return;
-  // Never pretend: nothing localises against the mosaic or drives by it in a session yet.
+  // Never pretend: the command has no ceiling-mode path yet.
   throw ModeUnavailableError(
       command +
-      " --mode ceiling: ceiling mode can teach (teach --mode ceiling on a mock: robot builds the "
-      "mosaic of ceiling landmarks and picks the relay images) but cannot replay yet. What "
-      "exists: the canonical ceiling view, the mosaic, localisation against it and the relay "
-      "images (core/ceiling/). Missing (issue 24): the replay session (localising against the "
-      "mosaic and driving from relay image to relay image) and its evaluation; see "
-      "docs/method/ceiling.md. Use --mode forward (the default).");
+      " --mode ceiling: ceiling mode can teach, replay and evaluate on mock: robots (teach "
+      "--mode ceiling, replay --mode ceiling, evaluate --mode ceiling) but " + command +
+      " does not run it yet (issue 24); see docs/method/ceiling.md. Use those commands, or "
+      "--mode forward (the default).");
+}
+
+void refuse_ceiling_on_real_robot(core::NavMode mode, const std::string& robot_url,
+                                  const std::string& command) {
+  if (mode != core::NavMode::kCeiling) return;
+  if (parse_robot_url(robot_url).kind == RobotUrl::Kind::kMock) return;
+  throw ModeUnavailableError(
+      command +
+      " --mode ceiling runs on mock: robots only for now: the ceiling's height above the camera "
+      "comes from the simulated world and is not configured or estimated on a real robot yet "
+      "(docs/method/ceiling.md)");
 }
 
 EventSink::EventSink(const std::string& spec) {

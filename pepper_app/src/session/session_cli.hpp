@@ -93,11 +93,17 @@ void add_mode_option(CLI::App* cmd, std::string& mode);
 /// The mode of a --mode value; throws ConfigError listing the modes for any other text.
 core::NavMode parse_mode(const std::string& text);
 
-/// Issue 24 is not done: ceiling mode teaches (mock robots) but replay, demo and evaluate drive
-/// only in forward mode. Throws
-/// ModeUnavailableError (exit 2, nothing moved) for ceiling mode, saying what exists of it and what
-/// is missing; returns for forward mode. `command` names the command in the message.
+/// Issue 24 is not done: ceiling mode teaches, replays and evaluates (mock robots) but `demo` runs
+/// only in forward mode. Throws ModeUnavailableError (exit 2, nothing moved) for ceiling mode,
+/// saying what exists of it and what is missing; returns for forward mode. `command` names the
+/// command in the message.
 void refuse_unimplemented_mode(core::NavMode mode, const std::string& command);
+
+/// Ceiling mode needs the ceiling's height above the camera, known only in the simulator so far:
+/// throws ModeUnavailableError (exit 2, before anything connects) for ceiling mode on a robot URL
+/// that is not `mock:`; returns otherwise. Throws RobotUrlError for a URL that names no robot.
+void refuse_ceiling_on_real_robot(core::NavMode mode, const std::string& robot_url,
+                                  const std::string& command);
 
 /// The map decides the camera size (issue 30): throws ConfigError, naming the setting to drop,
 /// when a --set in `sets` or the `config_file` explicitly asks for a size other than the map's;

@@ -1,6 +1,6 @@
 // --mode forward|ceiling (issue 24): the head lock follows the mode, ceiling mode is refused by
-// replay, demo and evaluate with a message saying teach works and what exists, and the ceiling
-// pitch is range-checked.
+// demo with a message saying what runs it, and on real robots by teach and replay, and the
+// ceiling pitch is range-checked.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -35,15 +35,26 @@ TEST(SessionMode, ModesParseAndCeilingIsRefusedSayingWhatExists) {
   EXPECT_EQ(parse_mode("forward"), core::NavMode::kForward);
   EXPECT_EQ(parse_mode("ceiling"), core::NavMode::kCeiling);
   EXPECT_THROW(parse_mode("sideways"), ConfigError);
-  EXPECT_NO_THROW(refuse_unimplemented_mode(core::NavMode::kForward, "replay"));
+  EXPECT_NO_THROW(refuse_unimplemented_mode(core::NavMode::kForward, "demo"));
   try {
-    refuse_unimplemented_mode(core::NavMode::kCeiling, "replay");
+    refuse_unimplemented_mode(core::NavMode::kCeiling, "demo");
     FAIL() << "ceiling mode was not refused";
   } catch (const ModeUnavailableError& e) {
-    EXPECT_THAT(e.what(), AllOf(HasSubstr("replay --mode ceiling"), HasSubstr("can teach"),
-                                HasSubstr("cannot replay yet"), HasSubstr("canonical ceiling view"),
-                                HasSubstr("mosaic"), HasSubstr("docs/method/ceiling.md"),
-                                HasSubstr("--mode forward")));
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("demo --mode ceiling"), HasSubstr("replay"),
+                                HasSubstr("evaluate"), HasSubstr("demo does not run it yet"),
+                                HasSubstr("docs/method/ceiling.md"), HasSubstr("--mode forward")));
+  }
+}
+
+TEST(SessionMode, CeilingModeIsRefusedOnRealRobotsOnly) {
+  EXPECT_NO_THROW(refuse_ceiling_on_real_robot(core::NavMode::kCeiling, "mock:w.yaml", "replay"));
+  EXPECT_NO_THROW(refuse_ceiling_on_real_robot(core::NavMode::kForward, "tcp://10.0.0.5", "replay"));
+  try {
+    refuse_ceiling_on_real_robot(core::NavMode::kCeiling, "tcp://10.0.0.5", "replay");
+    FAIL() << "ceiling mode on a real robot was not refused";
+  } catch (const ModeUnavailableError& e) {
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("replay --mode ceiling"), HasSubstr("mock: robots only"),
+                                HasSubstr("ceiling's height")));
   }
 }
 

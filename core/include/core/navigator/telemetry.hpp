@@ -29,6 +29,7 @@ enum class StopReason {
   kFeaturesLost,  ///< no usable feature for longer than the hold time
   kTourComplete,  ///< the final image was reached
   kSegmentOverdue,  ///< no key-image switch for far longer than teaching took: unsure, stopped
+  kRelayBreak,  ///< ceiling mode: the next relay segment is a break of the taught relay chain
 };
 
 const char* to_string(NavState s);
