@@ -156,10 +156,14 @@ std::optional<PathDeviation> TaughtPathTracker::deviation() {
     return d;
   }
   const double length_m = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
-  const double ux = (b.x_m - a.x_m) / length_m, uy = (b.y_m - a.y_m) / length_m;
+  // Two key images at one pose (a teach that stood still): the piece has no direction of its
+  // own; the taught heading gives it, and it has no curvature.
+  const bool has_length = length_m >= kMinDirectionLengthM;
+  const double ux = has_length ? (b.x_m - a.x_m) / length_m : std::cos(a.yaw_rad);
+  const double uy = has_length ? (b.y_m - a.y_m) / length_m : std::sin(a.yaw_rad);
   d.lateral_m = ux * (X_->y_m - a.y_m) - uy * (X_->x_m - a.x_m);
   d.heading_rad = wrap(X_->yaw_rad - (a.yaw_rad + std::clamp(f, 0.0, 1.0) * turn));
-  d.curvature_1_m = turn / length_m;
+  d.curvature_1_m = has_length ? turn / length_m : 0.0;
   return d;
 }
 

@@ -36,6 +36,21 @@ TEST(TaughtPathTracker, UnusableWithoutEveryPose) {
   EXPECT_FALSE(t.deviation().has_value());
 }
 
+// A teach that stood still keeps key images at one pose: the deviation is finite, its direction
+// the taught heading (the e2e teach over the mock NAOqi server teaches such a tour; a NaN
+// deviation reached the VNHV law there and ended the replay in an error).
+TEST(TaughtPathTracker, KeyImagesAtOnePoseGiveAFiniteDeviation) {
+  TaughtPathTracker t(Poses{OdometryPose{2.0, 1.0, M_PI / 2}, OdometryPose{2.0, 1.0, M_PI / 2}});
+  ASSERT_TRUE(t.usable());
+  t.set({1.9, 1.3, M_PI / 2 + 0.1}, OdometryPose{}, 0);  // 0.1 m left of the heading's line
+  const auto d = t.deviation();
+  ASSERT_TRUE(d.has_value());
+  EXPECT_NEAR(d->lateral_m, 0.1, 1e-12);  // facing +y: x = 1.9 is left of x = 2
+  EXPECT_NEAR(d->heading_rad, 0.1, 1e-12);
+  EXPECT_EQ(d->curvature_1_m, 0.0);
+  EXPECT_FALSE(d->in_place);
+}
+
 // Taught: 1 m along +x, a quarter turn left on the spot, 1 m along +y.
 Poses l_path() {
   return {OdometryPose{0, 0, 0}, OdometryPose{1, 0, 0}, OdometryPose{1, 0, M_PI / 2},

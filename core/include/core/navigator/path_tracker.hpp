@@ -63,6 +63,9 @@ class TaughtPathTracker {
   /// A short piece is a turn on the spot when its turning radius (length / turn) is below this
   /// (m); a short piece of a wider arc is a chord of it.
   static constexpr double kInPlaceMaxRadiusM = 0.1;
+  /// A piece shorter than this (m) that is no turn on the spot (two key images at one pose)
+  /// takes its direction from the taught heading, not from its endpoints.
+  static constexpr double kMinDirectionLengthM = 1e-6;
 
   /// `taught`: every key image's odometry pose, in tour order. usable() is false when any is
   /// missing or there are fewer than 2.
