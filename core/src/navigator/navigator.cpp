@@ -880,9 +880,12 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
   }
   fixed_this_frame_ = false;
   if (options_.controller == ControllerKind::kVnhv) omega = vnhv_omega(fm, tel);
-  if (!fixed_this_frame_) {
-    correct_heading_from_lines(fm, tel);
-    correct_position_from_floor_lines(fm, tel);
+  if (!fixed_this_frame_ && odom_ && tracker_.usable() && tracker_.estimate() && switcher_) {
+    // No VNHV fix: the lines matched with IN correct the odometry estimate, heading first.
+    const int in = switcher_->segment().next;
+    const auto pairs = line_pairs_with(fm, in);
+    correct_heading_from_lines(pairs, in, tel);
+    correct_position_from_floor_lines(pairs, in, tel);
   }
   if (!omega) {
     omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
@@ -1059,11 +1062,10 @@ double Navigator::odometry_demand(bool& on_the_spot) {
   return std::clamp(demand, -max_omega, max_omega);
 }
 
-std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> Navigator::line_pairs_with(
-    features::FrameMatcher& fm, int key_index) {
+Navigator::LinePairs Navigator::line_pairs_with(features::FrameMatcher& fm, int key_index) {
   const features::ImageFeatures& k = key(key_index);
   const features::TwoViewMatches& tv = fm.two_view(key_index, k);  // cached: the switching's own
-  std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> pairs;
+  LinePairs pairs;
   pairs.reserve(tv.lines.size());
   for (const features::LineMatch& m : tv.lines) {
     const features::LineSegment& a = k.lines[static_cast<size_t>(m.idx_a)];
@@ -1073,10 +1075,7 @@ std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> Navigator::
   return pairs;
 }
 
-void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel) {
-  if (!odom_ || !tracker_.usable() || !tracker_.estimate() || !switcher_) return;
-  const int in = switcher_->segment().next;
-  const auto pairs = line_pairs_with(fm, in);
+void Navigator::correct_heading_from_lines(const LinePairs& pairs, int in, Telemetry& tel) {
   // Only line structures where the odometry expects the room compete (a moved shelf's boards
   // are as horizontal as the skirting; line_yaw.hpp).
   const geometry::YawPrior prior{
@@ -1101,10 +1100,8 @@ void Navigator::correct_heading_from_lines(features::FrameMatcher& fm, Telemetry
   heading_sigma_rad_ = std::sqrt((1.0 - gain) * p);
 }
 
-void Navigator::correct_position_from_floor_lines(features::FrameMatcher& fm, Telemetry& tel) {
-  if (!odom_ || !tracker_.usable() || !tracker_.estimate() || !switcher_) return;
-  const int in = switcher_->segment().next;
-  const auto pairs = line_pairs_with(fm, in);
+void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in,
+                                                  Telemetry& tel) {
   if (pairs.size() < 2) return;
   // The robot in IN's taught frame; the floor frames are the optical centres', `ahead` of the
   // base's rotation axis: t_cam = t_base + (R(yaw) - I) (ahead, 0).

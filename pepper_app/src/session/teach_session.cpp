@@ -322,6 +322,13 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         if (writer) writer->append(*frame, sent.v_x_m_s, sent.omega_rad_s);
         ++result.frames_recorded;
       }
+      // The plot samples both modes publish, each adding its own counts.
+      const auto drive_sample = [&] {
+        return nlohmann::json{{"t_s", (frame->t_ns - t0_ns) * 1e-9},
+                              {"distance_m", result.distance_m},
+                              {"v_m_s", sent.v_x_m_s},
+                              {"omega_rad_s", sent.omega_rad_s}};
+      };
       if (recording && ceiling_teacher) {
         const core::ceiling::MosaicFrameResult step =
             ceiling_teacher->add_frame(*frame, travelled_m);
@@ -342,12 +349,10 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           link.publish_state({{"stop_reason", nullptr}});
         }
         ceiling_lost = !step.localised;
-        link.publish_samples({{"t_s", (frame->t_ns - t0_ns) * 1e-9},
-                              {"distance_m", result.distance_m},
-                              {"v_m_s", sent.v_x_m_s},
-                              {"omega_rad_s", sent.omega_rad_s},
-                              {"ceiling_inliers", step.inliers},
-                              {"ceiling_added", step.added}});
+        nlohmann::json sample = drive_sample();
+        sample["ceiling_inliers"] = step.inliers;
+        sample["ceiling_added"] = step.added;
+        link.publish_samples(sample);
       } else if (recording) {
         const core::mapping::TeachStep step = teacher->add_frame(*frame, travelled_m);
         if (pos) result.path_m.push_back(*pos);
@@ -394,12 +399,10 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           link.publish_state({{"teach", teach_state(travelled_m, key_list, view.n_lines,
                                                     view.n_points)}});
         }
-        link.publish_samples({{"t_s", (frame->t_ns - t0_ns) * 1e-9},
-                              {"distance_m", result.distance_m},
-                              {"v_m_s", sent.v_x_m_s},
-                              {"omega_rad_s", sent.omega_rad_s},
-                              {"n_lines", step.n_lines_three_view},
-                              {"n_points", step.n_points_two_view}});
+        nlohmann::json sample = drive_sample();
+        sample["n_lines"] = step.n_lines_three_view;
+        sample["n_points"] = step.n_points_two_view;
+        link.publish_samples(sample);
       }
       if (link.console() != nullptr) {
         Progress p;

@@ -301,12 +301,13 @@ class Navigator {
   /// telemetry line_yaw_*).
   /// The verified line matches with key image `key_index` as normalised segment pairs (key,
   /// current).
-  std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>> line_pairs_with(
-      features::FrameMatcher& fm, int key_index);
-  void correct_heading_from_lines(features::FrameMatcher& fm, Telemetry& tel);
+  using LinePairs = std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>>;
+  LinePairs line_pairs_with(features::FrameMatcher& fm, int key_index);
+  /// Both need the odometry estimate and a segment (IN = `in`); `pairs`: line_pairs_with(IN).
+  void correct_heading_from_lines(const LinePairs& pairs, int in, Telemetry& tel);
   /// The matched lines on the floor give the robot's position relative to IN across them
   /// (geometry/floor_lines.hpp): a Kalman update of the odometry estimate's position.
-  void correct_position_from_floor_lines(features::FrameMatcher& fm, Telemetry& tel);
+  void correct_position_from_floor_lines(const LinePairs& pairs, int in, Telemetry& tel);
   /// Whether dead reckoning can drive this frame (StepFacts::can_dead_reckon).
   bool can_dead_reckon() const;
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }
