@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -353,6 +354,10 @@ TEST_P(CrowdDisturbance, CrossesThePathInViewAndStepsAsideForTheRobot) {
     cv::absdiff(with, without, diff);
     if (cv::countNonZero(diff > 10) >= 0.03 * diff.total()) ++seen;
   }
+  std::cout << "[measured] " << GetParam().world << ": " << added << " crowd people, "
+            << crossing_s.size() << " crossings from s = " << *lo << " to " << *hi << " m of "
+            << pl.length_m() << " m; " << seen << " of " << frames
+            << " forward frames on the taught drive see the crowd\n";
   EXPECT_GE(seen, frames / 4) << seen << " of " << frames << " frames see the crowd";
 
   // One seed, one crowd; another seed, another.
