@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The standard closed-loop evaluation matrix (issue 26), with the shipped defaults at VGA:
-# every shipped world x {none, light x0.6, light x1.4, furniture, person, drops, latency},
+# every shipped world x {none, light x0.6, light x1.4, furniture, person, crowd, drops, latency},
 # 10 starts each, seed 1; plus 20 generated worlds (`pepper_app world generate`, seeds 1 to 20,
 # kinds room / corridor / building in turn: seed % 3 = 1, 2, 0) x {none, light x0.7}, 5 starts
 # each. The generated worlds are written by this script into DIR/worlds/ before the runs (the
@@ -67,7 +67,7 @@ for w in "${WORLDS[@]}"; do
   CONFIGS+=("${w}_none|$S --disturbance none")
   CONFIGS+=("${w}_light0.6|$S --disturbance light --light-factor 0.6")
   CONFIGS+=("${w}_light1.4|$S --disturbance light --light-factor 1.4")
-  for d in furniture person drops latency; do
+  for d in furniture person crowd drops latency; do
     CONFIGS+=("${w}_$d|$S --disturbance $d")
   done
 done

@@ -121,6 +121,7 @@ core::Frame MockRobot::capture(int width_px, int height_px) {
   view.intrinsics = options_.intrinsics_vga.scaled_to(width_px, height_px);
   view.light = light_;
   view.t_s = static_cast<double>(base_.now_ns()) * 1e-9;
+  view.robot_base_m = Eigen::Vector2d(base_.pose().x_m, base_.pose().y_m);
   view.yaw_rate_cam_rad_s = base_.velocity().omega_rad_s * std::cos(head_pitch_rad_);
   view.frame_index = static_cast<uint64_t>(frames_);
   core::Frame frame;

@@ -371,7 +371,7 @@ void Renderer::render(const World& world, const ViewState& view, cv::Mat& out) {
 
   const Eigen::Isometry3d T_cam_world = view.T_world_cam.inverse();
   scratch_quads_.clear();
-  world.moving_quads(view.t_s, scratch_quads_);
+  world.moving_quads(view.t_s, scratch_quads_, view.robot_base_m);
 
   std::vector<Prepared> normal;
   std::vector<Prepared> mirrored;

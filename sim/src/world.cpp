@@ -680,6 +680,20 @@ Eigen::Vector3d MovingObstacle::pose_at(double t_s) const {
   return {p.x(), p.y(), heading};
 }
 
+Eigen::Vector3d MovingObstacle::pose_near(double t_s,
+                                          const std::optional<Eigen::Vector2d>& robot_m) const {
+  Eigen::Vector3d pose = pose_at(t_s);
+  if (!robot_m || !(keep_clear_m > 0.0)) return pose;
+  Eigen::Vector2d away = pose.head<2>() - *robot_m;
+  const double d = away.norm();
+  if (d >= keep_clear_m) return pose;
+  // On the robot itself (a measure-zero case) the person steps to the side of its heading.
+  away = d > 1e-9 ? Eigen::Vector2d(away / d)
+                  : Eigen::Vector2d(-std::sin(pose.z()), std::cos(pose.z()));
+  pose.head<2>() = *robot_m + keep_clear_m * away;
+  return pose;
+}
+
 Pose2D Scenario::start_pose() const {
   if (teach_start) return *teach_start;
   if (waypoints_m.size() >= 2) {
@@ -752,19 +766,20 @@ std::optional<std::string> World::collision(const Eigen::Vector2d& p_m, double r
   for (const BoxObstacle& b : boxes)
     if (dist_point_rect(p_m, b.center_m, b.half_size_m, b.yaw_rad) < radius_m) return b.what;
   for (const MovingObstacle& m : people) {
-    const Eigen::Vector3d pose = m.pose_at(t_s);
+    const Eigen::Vector3d pose = m.pose_near(t_s, p_m);
     if (dist_point_rect(p_m, pose.head<2>(), m.size_m.head<2>() / 2, pose.z()) < radius_m)
       return m.what;
   }
   return std::nullopt;
 }
 
-void World::moving_quads(double t_s, std::vector<Quad>& out) const {
+void World::moving_quads(double t_s, std::vector<Quad>& out,
+                         const std::optional<Eigen::Vector2d>& robot_m) const {
   if (people.empty()) return;
   World tmp;  // borrow the builder's box code; only its quads are used
   Builder b(tmp, {});
   for (const MovingObstacle& m : people) {
-    const Eigen::Vector3d pose = m.pose_at(t_s);
+    const Eigen::Vector3d pose = m.pose_near(t_s, robot_m);
     Style s;
     s.texture = m.texture;
     s.tile_m = {m.size_m.y(), m.size_m.z()};
@@ -967,6 +982,7 @@ World parse_world(const std::string& yaml_text, const std::string& source_name,
     if (!sz.empty()) p.size_m = {sz[0], sz[1], sz[2]};
     p.loop = m.boolean("loop", false);
     p.start_offset_m = m.num("start_offset_m", 0.0);
+    p.keep_clear_m = m.nonneg("keep_clear_m", 0.0);
     const Style st = b.style(m, {1.0, 1.0});
     p.texture = st.texture;
     p.brightness = st.brightness;

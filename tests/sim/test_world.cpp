@@ -195,6 +195,43 @@ TEST(World, MovingObstacleWalksBackAndForth) {
   EXPECT_NEAR(m.pose_at(3.0).x(), 1.0, 1e-12);
 }
 
+// A person who keeps clear (crowd disturbance) steps aside from the robot: where its walk
+// passes within keep_clear_m of the base it stands keep_clear_m away on the ray from the base
+// through its walk's position, and walks its path elsewhere; the collision test of the robot's
+// disc then never touches it, while the same walk without keep_clear_m does.
+TEST(World, PersonWhoKeepsClearStepsAsideFromTheRobot) {
+  World w;
+  MovingObstacle m;
+  m.path_m = {{-3, 0}, {3, 0}};  // crosses the robot's position (0, 0.2) at t = 3 s
+  m.speed_m_s = 1.0;
+  m.what = "walker";
+  w.people.push_back(m);
+  const Eigen::Vector2d robot(0.0, 0.2);
+  for (double t = 0.0; t <= 6.0; t += 0.05) {
+    EXPECT_EQ(w.people[0].pose_near(t, robot), w.people[0].pose_at(t)) << "kinematic, t " << t;
+  }
+  EXPECT_TRUE(w.collision(robot, 0.3, 3.0));  // the kinematic walk runs into the robot
+  w.people[0].keep_clear_m = 0.7;
+  bool stepped_aside = false;
+  for (double t = 0.0; t <= 6.0; t += 0.05) {
+    const Eigen::Vector3d walk = w.people[0].pose_at(t);
+    const Eigen::Vector3d near = w.people[0].pose_near(t, robot);
+    const double walk_distance = (walk.head<2>() - robot).norm();
+    if (walk_distance >= 0.7) {
+      EXPECT_EQ(near, walk) << "t " << t;
+    } else {
+      stepped_aside = true;
+      EXPECT_NEAR((near.head<2>() - robot).norm(), 0.7, 1e-12) << "t " << t;
+      // Same side of the robot as its walk's position (on the ray through it).
+      EXPECT_GT((near.head<2>() - robot).dot(walk.head<2>() - robot), 0.0) << "t " << t;
+      EXPECT_EQ(near.z(), walk.z());
+    }
+    EXPECT_FALSE(w.collision(robot, 0.3, t)) << "t " << t;
+  }
+  EXPECT_TRUE(stepped_aside);
+  EXPECT_EQ(w.people[0].pose_near(3.0, std::nullopt), w.people[0].pose_at(3.0));  // no robot
+}
+
 }  // namespace
 }  // namespace pepper::sim
 

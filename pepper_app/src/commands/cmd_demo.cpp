@@ -3,7 +3,9 @@
 // four 90-degree turns, back to the start; scripted drive, no human), replay it from a perturbed
 // start, and write an HTML report (top view of taught and replayed paths, omega and feature-count
 // plots, summary table). Everything happens through the same session loops as `teach` and
-// `replay` on a real robot; only the robot is simulated.
+// `replay` on a real robot; only the robot is simulated. `--mode ceiling` teaches a ceiling
+// map and replays it with the ceiling navigator, as `teach`/`replay --mode ceiling` do (the
+// feature-count plot then shows the landmarks matched, telemetry's point count).
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -18,6 +20,7 @@
 #include "evaluation/metrics.hpp"
 #include "report/html_report.hpp"
 #include "report/plot.hpp"
+#include "session/ceiling_replay.hpp"
 #include "session/console.hpp"
 #include "session/replay_session.hpp"
 #include "session/session_cli.hpp"
@@ -88,7 +91,6 @@ int run_demo(const DemoArgs& args) {
     }
     const AppConfig config = load_session_config(common);
     const core::NavMode mode = parse_mode(common.mode);
-    refuse_unimplemented_mode(mode, "demo");
     const std::filesystem::path out = a.out;
     std::filesystem::create_directories(out);
     const std::filesystem::path map_dir = out / "map";
@@ -115,6 +117,7 @@ int run_demo(const DemoArgs& args) {
     to.camera = camera_request(config);
     to.head = head_request(config, mode);
     to.teach = config.teach_options();
+    to.mode = mode;
     to.feedback = teach_feedback_limits(config, to.min_key_features);
     to.config_json = config_to_json(config).dump();
     to.scripted = true;
@@ -155,8 +158,15 @@ int run_demo(const DemoArgs& args) {
     ro.arrival_tolerance_m = config.replay.arrival_tolerance_m;
     ro.arrival_tolerance_rad = config.replay.arrival_tolerance_rad;
     if (ui) ro.pace_hz = 2.0 * config.robot.camera_fps;
+    core::memory::VisualMemory map = core::memory::load_map(map_dir);
+    StepFunction step;  // ceiling mode: the ceiling navigator steps the same replay loop
+    if (mode == core::NavMode::kCeiling) {
+      step = make_ceiling_replay(*replay_robot.mock, map_dir, map, ro.head.head_pitch_rad,
+                                 config.ceiling_navigator_options())
+                 .step;
+    }
     const ReplayResult replayed =
-        run_replay_session(replay_robot, core::memory::load_map(map_dir), ro, link);
+        run_replay_session(replay_robot, std::move(map), ro, link, std::move(step));
     const double replay_s = std::chrono::duration<double>(Clock::now() - t1).count();
     console.line("  replay " + replayed.outcome + " after " + std::to_string(replayed.frames) +
                  " frames (" + fmt(replay_s, 1) + " s)" +

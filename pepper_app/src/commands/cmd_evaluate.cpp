@@ -45,6 +45,7 @@ struct EvaluateArgs {
   double light_factor = 0.0;
   double drop_probability = 0.15;
   double latency_s = 0.2;
+  int crowd_people = 5;
   double converged_after_m = 1.5;
   double converged_below_m = 0.05;
   double end_tolerance_m = 0.3;
@@ -133,6 +134,7 @@ int run_evaluate(const EvaluateArgs& a) {
   o.disturbance.light_factor = a.light_factor;
   o.disturbance.drop_probability = a.drop_probability;
   o.disturbance.latency_s = a.latency_s;
+  o.disturbance.crowd_people = a.crowd_people;
   o.converged_after_m = a.converged_after_m;
   o.converged_below_m = a.converged_below_m;
   o.end_tolerance_m = a.end_tolerance_m;
@@ -225,8 +227,10 @@ void register_evaluate_command(CLI::App& app) {
   cmd->add_option("--map-dir", args->map_dir, "Folder for the taught maps (default: under --plots "
                                               "or a temporary folder)");
   cmd->add_option("--disturbance", args->disturbances,
-                  "One or more configurations, each none or light|furniture|person|drops|latency, "
-                  "combined with '+' (e.g. light+person); each is evaluated separately")
+                  "One or more configurations, each none or "
+                  "light|furniture|person|crowd|drops|latency, combined with '+' (e.g. "
+                  "light+person); each is evaluated separately. crowd: several people crossing "
+                  "the path ahead of the robot (they step aside for it; docs/evaluation.md)")
       ->capture_default_str();
   cmd->add_flag("--compare-features", args->compare_features,
                 "Run lines only, points only and both, side by side");
@@ -255,6 +259,9 @@ void register_evaluate_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--latency-s", args->latency_s, "latency disturbance: command latency, s")
       ->capture_default_str();
+  cmd->add_option("--crowd-people", args->crowd_people,
+                  "crowd disturbance: how many people cross the path")
+      ->capture_default_str();
   cmd->add_option("--converged-after-m", args->converged_after_m,
                   "Deviation statistics skip this travelled distance")
       ->capture_default_str();
@@ -270,6 +277,7 @@ void register_evaluate_command(CLI::App& app) {
       "  pepper_app evaluate --world worlds/robotics_room.yaml --starts 10 --size 320x240 \\\n"
       "      --json eval.json --plots eval_plots\n"
       "  pepper_app evaluate --world worlds/window_corridor.yaml --disturbance none light person\n"
+      "  pepper_app evaluate --world worlds/robotics_room.yaml --mode ceiling --disturbance crowd\n"
       "  pepper_app evaluate --world worlds/white_corridor.yaml --compare-features --starts 5");
   cmd->callback([args, cmd] {
     std::string line = "pepper_app evaluate";

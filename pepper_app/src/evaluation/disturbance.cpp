@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -172,6 +173,131 @@ bool add_person(YAML::Node root, const sim::World& world, const std::vector<Eige
   return false;
 }
 
+
+/// Unit normal (to the left) of the path at s, its direction smoothed over +-0.4 m.
+Eigen::Vector2d path_normal(const Polyline& pl, double s) {
+  Eigen::Vector2d t = pl.at(std::min(s + 0.4, pl.length_m())) - pl.at(std::max(s - 0.4, 0.0));
+  if (t.norm() < 1e-9) return {0.0, 0.0};
+  t.normalize();
+  return {-t.y(), t.x()};
+}
+
+/// How far (<= max_m, 5 cm steps) a person can stand from the path point at s to one side
+/// (side +1 left, -1 right) with nothing of the world within 0.3 m of it.
+double room_beside(const sim::World& world, const Polyline& pl, double s, double side,
+                   double max_m) {
+  const Eigen::Vector2d p = pl.at(s);
+  const Eigen::Vector2d n = path_normal(pl, s);
+  double room = 0.0;
+  for (double d = 0.05; d <= max_m + 1e-9; d += 0.05) {
+    if (world.collision(p + side * d * n, 0.3, 0.0)) break;
+    room = d;
+  }
+  return room;
+}
+
+/// One crowd walk: a zigzag over [s0, s0 + stretch] crossing the path `crossings` times,
+/// starting on `side`; empty when a vertex has less than 0.35 m of room or a leg touches the
+/// world (0.3 m clearance, every 5 cm).
+std::vector<Eigen::Vector2d> crowd_walk(const sim::World& world, const Polyline& pl, double s0,
+                                        double stretch, int crossings, double side,
+                                        double offset_m) {
+  constexpr double kMinRoom_m = 0.35;
+  std::vector<Eigen::Vector2d> walk;
+  for (int i = 0; i <= crossings; ++i) {
+    const double s = s0 + stretch * i / crossings;
+    const double sd = (i % 2 == 0) ? side : -side;
+    const Eigen::Vector2d n = path_normal(pl, s);
+    if (n.norm() < 0.5) return {};
+    const double room = room_beside(world, pl, s, sd, offset_m);
+    if (room < kMinRoom_m) return {};
+    walk.push_back(pl.at(s) + sd * room * n);
+  }
+  for (size_t i = 1; i < walk.size(); ++i) {
+    const Eigen::Vector2d a = walk[i - 1], b = walk[i];
+    const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.05)));
+    for (int k = 1; k < steps; ++k) {
+      if (world.collision(a + (b - a) * k / steps, 0.3, 0.0)) return {};
+    }
+  }
+  return walk;
+}
+
+/// Adds the crowd (DisturbanceOptions::crowd_*); `world` is the world the walks must stay
+/// clear of (furniture already moved). Returns how many people were placed.
+int add_crowd(YAML::Node root, const sim::World& world, const std::vector<Eigen::Vector2d>& path,
+              const DisturbanceOptions& o, std::mt19937_64& rng,
+              std::vector<std::string>& notes) {
+  if (path.size() < 2 || o.crowd_people == 0) return 0;
+  const Polyline pl(path);
+  const double len = pl.length_m();
+  const double stretch = std::min(o.crowd_stretch_m, 0.8 * len);
+  const double s_lo = 0.1 * len, s_hi = len - stretch;
+  if (s_hi < s_lo) {
+    notes.push_back("the tour is too short for a crowd: not added");
+    return 0;
+  }
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const int n = o.crowd_people;
+  int placed = 0;
+  for (int k = 0; k < n; ++k) {
+    // Draws first, so each person's draws do not depend on where the others found room.
+    const double jitter = (u01(rng) - 0.5) * 0.5 * (s_hi - s_lo) / n;
+    const double first_side = u01(rng) < 0.5 ? 1.0 : -1.0;
+    const double speed = o.crowd_speed_min_m_s +
+                         (o.crowd_speed_max_m_s - o.crowd_speed_min_m_s) * u01(rng);
+    const double start_fraction = u01(rng);
+    const double centre = s_lo + (s_hi - s_lo) * (k + 0.5) / n + jitter;
+    std::vector<Eigen::Vector2d> walk;
+    double s0 = centre;
+    // Nearest free stretch to the planned one: 0.25 m steps either way, both first sides.
+    for (int j = 0; j <= 2 * static_cast<int>(std::ceil((s_hi - s_lo) / 0.25)) && walk.empty();
+         ++j) {
+      const double shift = 0.25 * ((j + 1) / 2) * (j % 2 == 0 ? 1.0 : -1.0);
+      s0 = centre + shift;
+      if (s0 < s_lo - 1e-9 || s0 > s_hi + 1e-9) continue;
+      for (const double side : {first_side, -first_side}) {
+        walk = crowd_walk(world, pl, s0, stretch, o.crowd_crossings, side, o.crowd_offset_m);
+        if (!walk.empty()) break;
+      }
+    }
+    if (walk.empty()) {
+      notes.push_back("crowd person " + std::to_string(k + 1) +
+                      ": no room to cross the path anywhere: not added");
+      continue;
+    }
+    double walk_len = 0.0;
+    YAML::Node pts(YAML::NodeType::Sequence);
+    for (size_t i = 0; i < walk.size(); ++i) {
+      pts.push_back(flow_pair(walk[i].x(), walk[i].y()));
+      if (i > 0) walk_len += (walk[i] - walk[i - 1]).norm();
+    }
+    const std::string name = "crowd_" + std::to_string(k + 1);
+    YAML::Node texture = root["textures"][name];
+    texture["type"] = "noise";
+    texture["mean"] = 55 + 12 * (k % 5);  // clothes of different greys
+    texture["contrast"] = 30;
+    texture["feature_px"] = 24;
+    texture["seed"] = 5000 + k;
+    YAML::Node person;
+    person["name"] = name;
+    person["path"] = pts;
+    person["speed_m_s"] = speed;
+    person["start_offset_m"] = start_fraction * walk_len;
+    person["keep_clear_m"] = o.crowd_keep_clear_m;
+    person["texture"] = name;
+    root["people"].push_back(person);
+    ++placed;
+    std::ostringstream os;
+    os.precision(2);
+    os << std::fixed << name << " crossing the path " << o.crowd_crossings << " times over "
+       << stretch << " m from " << s0 << " m, " << speed << " m/s, keeping "
+       << o.crowd_keep_clear_m << " m from the robot";
+    notes.push_back(os.str());
+  }
+  return placed;
+}
+
 }  // namespace
 
 const char* to_string(Disturbance d) {
@@ -179,6 +305,7 @@ const char* to_string(Disturbance d) {
     case Disturbance::kLight: return "light";
     case Disturbance::kFurniture: return "furniture";
     case Disturbance::kPerson: return "person";
+    case Disturbance::kCrowd: return "crowd";
     case Disturbance::kDrops: return "drops";
     case Disturbance::kLatency: return "latency";
   }
@@ -196,11 +323,11 @@ std::string disturbance_label(const std::set<Disturbance>& disturbances) {
 
 Disturbance parse_disturbance(const std::string& name) {
   for (Disturbance d : {Disturbance::kLight, Disturbance::kFurniture, Disturbance::kPerson,
-                        Disturbance::kDrops, Disturbance::kLatency}) {
+                        Disturbance::kCrowd, Disturbance::kDrops, Disturbance::kLatency}) {
     if (name == to_string(d)) return d;
   }
   throw std::invalid_argument("unknown disturbance '" + name +
-                              "' (light, furniture, person, drops, latency, none)");
+                              "' (light, furniture, person, crowd, drops, latency, none)");
 }
 
 std::vector<std::string> DisturbanceOptions::validate() const {
@@ -220,6 +347,19 @@ std::vector<std::string> DisturbanceOptions::validate() const {
   range("min_path_clearance_m", min_path_clearance_m, 0.0, 2.0);
   range("person_offset_m", person_offset_m, 0.3, 3.0);
   range("person_speed_m_s", person_speed_m_s, 0.0, 2.0);
+  if (!(crowd_people >= 0 && crowd_people <= 20)) {
+    e.push_back("disturbance.crowd_people = " + std::to_string(crowd_people) +
+                ": must be in [0, 20]");
+  }
+  if (!(crowd_crossings >= 1 && crowd_crossings <= 10)) {
+    e.push_back("disturbance.crowd_crossings = " + std::to_string(crowd_crossings) +
+                ": must be in [1, 10]");
+  }
+  range("crowd_stretch_m", crowd_stretch_m, 0.5, 20.0);
+  range("crowd_offset_m", crowd_offset_m, 0.35, 3.0);
+  range("crowd_speed_min_m_s", crowd_speed_min_m_s, 0.1, 2.0);
+  range("crowd_speed_max_m_s", crowd_speed_max_m_s, crowd_speed_min_m_s, 2.0);
+  range("crowd_keep_clear_m", crowd_keep_clear_m, 0.0, 3.0);
   range("drop_probability", drop_probability, 0.0, 0.9);
   range("latency_s", latency_s, 0.0, 2.0);
   return e;
@@ -266,12 +406,13 @@ DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& wor
   }
   DisturbedWorld out;
   out.world = world;
-  const bool yaml_level =
-      disturbances.count(Disturbance::kFurniture) || disturbances.count(Disturbance::kPerson);
+  const bool yaml_level = disturbances.count(Disturbance::kFurniture) ||
+                          disturbances.count(Disturbance::kPerson) ||
+                          disturbances.count(Disturbance::kCrowd);
   if (yaml_level) {
     if (world->source.empty()) {
       throw std::invalid_argument(
-          "furniture/person disturbances need a world loaded from a file (World::source)");
+          "furniture/person/crowd disturbances need a world loaded from a file (World::source)");
     }
     YAML::Node root = YAML::LoadFile(world->source.string());
     std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + 17);
@@ -280,6 +421,19 @@ DisturbedWorld make_disturbed_world(const std::shared_ptr<const sim::World>& wor
     }
     if (disturbances.count(Disturbance::kPerson)) {
       add_person(root, *world, taught_path_m, options, out.notes);
+    }
+    if (disturbances.count(Disturbance::kCrowd)) {
+      // Its own generator: adding the crowd leaves the furniture's draws as they were.
+      std::mt19937_64 crowd_rng(seed * 0x9E3779B97F4A7C15ull + 29);
+      const bool moved = disturbances.count(Disturbance::kFurniture) > 0;
+      std::optional<sim::World> furnished;  // the walks keep clear of the moved furniture
+      if (moved) {
+        YAML::Emitter em;
+        em << root;
+        furnished = sim::parse_world(em.c_str(), world->source.string() + " (moved furniture)",
+                                     world->source.parent_path());
+      }
+      add_crowd(root, moved ? *furnished : *world, taught_path_m, options, crowd_rng, out.notes);
     }
     YAML::Emitter em;
     em << root;

@@ -38,7 +38,7 @@ void add_mode_option(CLI::App* cmd, std::string& mode) {
   cmd->add_option("--mode", mode,
                   "What the robot navigates by: forward (the camera looking ahead) or ceiling "
                   "(the camera looking up, docs/method/ceiling.md; mock: robots only for "
-                  "now; demo refuses it)")
+                  "now)")
       ->check(CLI::IsMember({"forward", "ceiling"}))
       ->capture_default_str();
 }
@@ -47,17 +47,6 @@ core::NavMode parse_mode(const std::string& text) {
   const auto mode = core::nav_mode_from_string(text);
   if (!mode) throw ConfigError("--mode " + text + ": must be forward or ceiling");
   return *mode;
-}
-
-void refuse_unimplemented_mode(core::NavMode mode, const std::string& command) {
-  if (mode == core::NavMode::kForward) return;
-  // Never pretend: the command has no ceiling-mode path yet.
-  throw ModeUnavailableError(
-      command +
-      " --mode ceiling: ceiling mode can teach, replay and evaluate on mock: robots (teach "
-      "--mode ceiling, replay --mode ceiling, evaluate --mode ceiling) but " + command +
-      " does not run it yet (issue 24); see docs/method/ceiling.md. Use those commands, or "
-      "--mode forward (the default).");
 }
 
 void refuse_ceiling_on_real_robot(core::NavMode mode, const std::string& robot_url,

@@ -93,11 +93,6 @@ void add_mode_option(CLI::App* cmd, std::string& mode);
 /// The mode of a --mode value; throws ConfigError listing the modes for any other text.
 core::NavMode parse_mode(const std::string& text);
 
-/// Issue 24 is not done: ceiling mode teaches, replays and evaluates (mock robots) but `demo` runs
-/// only in forward mode. Throws ModeUnavailableError (exit 2, nothing moved) for ceiling mode,
-/// saying what exists of it and what is missing; returns for forward mode. `command` names the
-/// command in the message.
-void refuse_unimplemented_mode(core::NavMode mode, const std::string& command);
 
 /// Ceiling mode needs the ceiling's height above the camera, known only in the simulator so far:
 /// throws ModeUnavailableError (exit 2, before anything connects) for ceiling mode on a robot URL

@@ -24,6 +24,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <opencv2/core/mat.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,9 @@ struct ViewState {
   core::CameraIntrinsics intrinsics = core::CameraIntrinsics::pepper_top_vga();
   LightingCondition light;
   double t_s = 0.0;                 ///< simulated time, for moving obstacles
+  /// The robot's base (x, y) in the world, if the camera is on one: people who keep clear of
+  /// the robot (MovingObstacle::keep_clear_m) step aside from it.
+  std::optional<Eigen::Vector2d> robot_base_m;
   double yaw_rate_cam_rad_s = 0.0;  ///< rotation rate about the camera's vertical (motion blur)
   uint64_t frame_index = 0;         ///< selects the noise of this frame
 };

@@ -87,6 +87,8 @@ struct BoxObstacle {
 };
 
 /// A person-sized textured box walking a polyline at constant speed (ping-pong or loop).
+/// People are kinematic: they walk their polyline whatever is in the way, unless keep_clear_m
+/// > 0: then they step aside for the robot (pose_near), as people in a crowd do.
 struct MovingObstacle {
   std::vector<Eigen::Vector2d> path_m;
   double speed_m_s = 0.8;
@@ -96,9 +98,19 @@ struct MovingObstacle {
   int texture = 0;
   double brightness = 1.0;
   std::string what;
+  /// > 0: the person never comes closer than this to the robot's base (rotation axis), metres:
+  /// where its walk would, it stands this far from the robot on the ray from the robot through
+  /// its walk's position (it steps aside, and walks on once the robot has passed). 0: kinematic.
+  /// Keeping clear of a robot of radius r needs keep_clear_m > r + the footprint's half
+  /// diagonal (0.3 + 0.27 m for Pepper and the default size).
+  double keep_clear_m = 0.0;
 
-  /// Centre (x, y) and heading (rad) at simulated time t_s.
+  /// Centre (x, y) and heading (rad) of its walk at simulated time t_s (the robot ignored).
   Eigen::Vector3d pose_at(double t_s) const;
+  /// Where it stands at t_s when the robot's base is at robot_m: pose_at(t_s), stepped aside
+  /// to keep_clear_m from robot_m (see keep_clear_m; the heading is its walk's). Without a
+  /// robot, or with keep_clear_m = 0, pose_at(t_s).
+  Eigen::Vector3d pose_near(double t_s, const std::optional<Eigen::Vector2d>& robot_m) const;
 };
 
 /// What a ceiling fixture is (YAML `ceiling_items[i].kind`, ceiling_item_kind_from_string).
@@ -186,11 +198,15 @@ struct World {
   const LightingCondition& light(const std::string& condition) const;
 
   /// What a disc of radius_m at p_m (at time t_s, for the moving obstacles) touches, or nullopt.
+  /// The disc is the robot's: people who keep clear (MovingObstacle::keep_clear_m) step aside
+  /// from p_m.
   std::optional<std::string> collision(const Eigen::Vector2d& p_m, double radius_m,
                                        double t_s) const;
 
-  /// Render quads of the moving obstacles at time t_s (appended to `out`).
-  void moving_quads(double t_s, std::vector<Quad>& out) const;
+  /// Render quads of the moving obstacles at time t_s (appended to `out`), with the robot's
+  /// base at robot_m (people who keep clear step aside from it; MovingObstacle::pose_near).
+  void moving_quads(double t_s, std::vector<Quad>& out,
+                    const std::optional<Eigen::Vector2d>& robot_m = std::nullopt) const;
 };
 
 /// Loads, builds and validates a world file. Relative texture files resolve against its folder.

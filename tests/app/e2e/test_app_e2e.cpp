@@ -158,6 +158,29 @@ TEST(AppE2E, DemoReachesTheEndAndWritesTheReport) {
   EXPECT_EQ(last_event(events, "teach_done").value("outcome", ""), "finished");
 }
 
+// `demo --mode ceiling` (issue 24): the same three phases with the head looking up; the map is a
+// ceiling map (mosaic and relay images) and the replay runs the ceiling navigator through the
+// replay loop to the end of the quick tour (robotics_room has ceiling fixtures).
+TEST(DemoE2E, CeilingModeTeachesAndReplaysTheQuickTour) {
+  const fs::path dir = fresh_dir("demo_ceiling");
+  const fs::path events = dir / "events.jsonl";
+  test::AppProcess demo({"demo", "--quick", "--mode", "ceiling", "--out", (dir / "out").string(),
+                         "--events", events.string()},
+                        dir, "demo");
+  ASSERT_EQ(demo.wait(std::chrono::seconds(240)), 0) << demo.both();
+  const core::memory::VisualMemory map = core::memory::load_map(dir / "out" / "map");
+  EXPECT_EQ(map.mode, core::NavMode::kCeiling);
+  EXPECT_TRUE(fs::exists(dir / "out" / "map" / "mosaic.json"));
+  const auto replay = last_event(events, "replay_done");
+  ASSERT_TRUE(replay.is_object()) << demo.both();
+  EXPECT_EQ(replay["outcome"], "tour_complete");
+  const auto report = last_event(events, "report");
+  ASSERT_TRUE(report.is_object()) << demo.both();
+  EXPECT_TRUE(report["success"].get<bool>());
+  EXPECT_LT(report["final_error_m"].get<double>(), 0.3);
+  EXPECT_LT(report["lateral_max_m"].get<double>(), 0.15);
+}
+
 // `--events -` writes the events to stdout, as the commands did before the console (issue 25):
 // every stdout line is JSON, and the human lines stay on stderr.
 TEST(AppE2E, EventsDashWritesJsonLinesToStdout) {

@@ -1,8 +1,8 @@
 // Closed-loop evaluation on the mock robot (pepper_app/src/evaluation): a short tour with one
 // turn in a small shipped test world (data/small_room.yaml) is taught at QVGA and replayed from
 // two perturbed starts; the replays must converge to the taught path and stop at its end.
-// Also: disturbed worlds (moved furniture keeps the path clear, a person is added, light
-// factor), and the JSON / table outputs.
+// Also: disturbed worlds (moved furniture keeps the path clear, a person is added, a crowd
+// crosses the path, light factor), and the JSON / table outputs.
 #include "evaluation/closed_loop.hpp"
 
 #include <gtest/gtest.h>
@@ -10,13 +10,17 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <memory>
 
 #include "evaluation/disturbance.hpp"
 #include "evaluation/metrics.hpp"
 #include "evaluation/output.hpp"
+#include "sim/mock_robot.hpp"
+#include "sim/renderer.hpp"
 #include "sim/world.hpp"
 #include "support/temp_dir.hpp"
 
@@ -259,6 +263,135 @@ TEST(Disturbances, PersonFindsRoomWhereTheMiddleIsANarrowCorridor) {
     EXPECT_GT(pl.project(pose.head<2>()).distance_m, 0.3 + 0.27) << "t = " << t;
     EXPECT_FALSE(w->collision(pose.head<2>(), 0.25, 0.0)) << "t = " << t;
   }
+}
+
+// The crowd (DisturbanceOptions::crowd_*) on the two shipped worlds of the ceiling comparison
+// (docs/method/ceiling.md): every person's walk crosses the taught path; the crossings are
+// spread over the tour; the taught path stays passable at every time because the people step
+// aside (and would not be passable if they walked through: they really cross it); the forward
+// camera of a robot driving the taught path at the teach speed sees them on many frames; one
+// seed gives one crowd and another seed another.
+struct CrowdCase {
+  const char* world;
+  size_t min_people;  // room_corridor_room's 2 m corridor leaves less room than the lab
+};
+
+class CrowdDisturbance : public ::testing::TestWithParam<CrowdCase> {};
+
+TEST_P(CrowdDisturbance, CrossesThePathInViewAndStepsAsideForTheRobot) {
+  const auto w = std::make_shared<const sim::World>(sim::load_world(
+      std::string(PEPPER_SOURCE_DIR) + "/worlds/" + GetParam().world + ".yaml"));
+  const std::vector<Eigen::Vector2d>& path = w->scenario.waypoints_m;
+  const DisturbanceOptions o;
+  const DisturbedWorld d = make_disturbed_world(w, {Disturbance::kCrowd}, o, path, 1);
+  const size_t added = d.world->people.size() - w->people.size();
+  std::string notes;
+  for (const auto& n : d.notes) notes += n + "\n";
+  EXPECT_LE(added, static_cast<size_t>(o.crowd_people)) << notes;
+  EXPECT_GE(added, GetParam().min_people) << notes;
+  const Polyline pl(path);
+  // Crossings: a walk's leg whose ends lie on both sides of the path, at the foot point's s.
+  std::vector<double> crossing_s;
+  for (size_t k = w->people.size(); k < d.world->people.size(); ++k) {
+    const sim::MovingObstacle& p = d.world->people[k];
+    EXPECT_GT(p.keep_clear_m, 0.3 + 0.27) << p.what;
+    int crossings = 0;
+    for (size_t i = 1; i < p.path_m.size(); ++i) {
+      const PathProjection a = pl.project(p.path_m[i - 1]), b = pl.project(p.path_m[i]);
+      if (a.lateral_m * b.lateral_m < 0.0) {
+        ++crossings;
+        crossing_s.push_back(pl.project(0.5 * (p.path_m[i - 1] + p.path_m[i])).s_m);
+      }
+    }
+    EXPECT_EQ(crossings, o.crowd_crossings) << p.what << "\n" << notes;
+  }
+  ASSERT_FALSE(crossing_s.empty());
+  const auto [lo, hi] = std::minmax_element(crossing_s.begin(), crossing_s.end());
+  EXPECT_GT(*hi - *lo, 0.5 * pl.length_m()) << "crossings bunched in one place";
+
+  // Passable: the robot's 0.3 m disc anywhere on the path, at any time, touches no one, because
+  // they step aside; the same walks without stepping aside do hit it somewhere.
+  auto walkers = std::make_shared<sim::World>(*d.world);
+  for (auto& p : walkers->people) p.keep_clear_m = 0.0;
+  bool kinematic_hit = false;
+  for (double s = 0.0; s <= pl.length_m(); s += 0.1) {
+    for (double t = 0.0; t <= 60.0; t += 0.5) {
+      const auto hit = d.world->collision(pl.at(s), 0.3, t);
+      ASSERT_FALSE(hit) << "s " << s << " t " << t << ": " << *hit;
+      kinematic_hit = kinematic_hit || walkers->collision(pl.at(s), 0.3, t);
+    }
+  }
+  EXPECT_TRUE(kinematic_hit) << "the walks never reach the robot's lane";
+
+  // Seen: the forward camera (head at pitch 0) of a robot on the taught path at the teach speed,
+  // every 0.5 s; a frame "sees the crowd" when >= 3 % of its pixels differ by more than 10 grey
+  // levels from the same view without the crowd (renders without noise).
+  sim::RenderOptions ro;
+  ro.noise_sigma_grey = 0.0;
+  ro.motion_blur_exposure_s = 0.0;
+  sim::Renderer renderer(ro);
+  const sim::CameraMount mount;
+  const double speed = w->scenario.teach_speed_m_s;
+  int frames = 0, seen = 0;
+  for (double t = 0.0; t * speed <= pl.length_m(); t += 0.5, ++frames) {
+    const double s = t * speed;
+    const Eigen::Vector2d p = pl.at(s);
+    const Eigen::Vector2d ahead = pl.at(std::min(s + 0.3, pl.length_m())) - pl.at(std::max(s - 0.3, 0.0));
+    Eigen::Isometry3d T_world_base = Eigen::Isometry3d::Identity();
+    T_world_base.translation() = Eigen::Vector3d(p.x(), p.y(), 0.0);
+    T_world_base.linear() =
+        Eigen::AngleAxisd(std::atan2(ahead.y(), ahead.x()), Eigen::Vector3d::UnitZ())
+            .toRotationMatrix();
+    sim::ViewState view;
+    view.T_world_cam = T_world_base * mount.T_base_cam(0.0, 0.0);
+    view.intrinsics = core::CameraIntrinsics::pepper_top_vga().scaled_to(320, 240);
+    view.light = w->light("teach");
+    view.t_s = t;
+    view.robot_base_m = p;
+    const cv::Mat with = renderer.render(*d.world, view).clone();
+    const cv::Mat without = renderer.render(*w, view);
+    cv::Mat diff;
+    cv::absdiff(with, without, diff);
+    if (cv::countNonZero(diff > 10) >= 0.03 * diff.total()) ++seen;
+  }
+  std::cout << "[measured] " << GetParam().world << ": " << added << " crowd people, "
+            << crossing_s.size() << " crossings from s = " << *lo << " to " << *hi << " m of "
+            << pl.length_m() << " m; " << seen << " of " << frames
+            << " forward frames on the taught drive see the crowd\n";
+  EXPECT_GE(seen, frames / 4) << seen << " of " << frames << " frames see the crowd";
+
+  // One seed, one crowd; another seed, another.
+  const DisturbedWorld again = make_disturbed_world(w, {Disturbance::kCrowd}, o, path, 1);
+  const DisturbedWorld other = make_disturbed_world(w, {Disturbance::kCrowd}, o, path, 2);
+  ASSERT_EQ(again.world->people.size(), d.world->people.size());
+  bool differs = other.world->people.size() != d.world->people.size();
+  for (size_t k = 0; k < d.world->people.size(); ++k) {
+    EXPECT_EQ(again.world->people[k].path_m, d.world->people[k].path_m);
+    EXPECT_EQ(again.world->people[k].speed_m_s, d.world->people[k].speed_m_s);
+    EXPECT_EQ(again.world->people[k].start_offset_m, d.world->people[k].start_offset_m);
+    if (!differs && k < other.world->people.size()) {
+      differs = other.world->people[k].path_m != d.world->people[k].path_m ||
+                other.world->people[k].speed_m_s != d.world->people[k].speed_m_s;
+    }
+  }
+  EXPECT_TRUE(differs);
+  EXPECT_EQ(parse_disturbance("crowd"), Disturbance::kCrowd);
+  EXPECT_EQ(disturbance_label({Disturbance::kFurniture, Disturbance::kCrowd}), "furniture+crowd");
+}
+
+INSTANTIATE_TEST_SUITE_P(ShippedWorlds, CrowdDisturbance,
+                         ::testing::Values(CrowdCase{"robotics_room", 5},
+                                           CrowdCase{"room_corridor_room", 5}),
+                         [](const auto& info) { return std::string(info.param.world); });
+
+TEST(Disturbances, CrowdOptionsAreValidated) {
+  DisturbanceOptions o;
+  o.crowd_people = 21;
+  o.crowd_speed_max_m_s = 0.2;  // below the minimum speed
+  const auto errors = o.validate();
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_NE(errors[0].find("disturbance.crowd_people"), std::string::npos);
+  EXPECT_NE(errors[1].find("disturbance.crowd_speed_max_m_s"), std::string::npos);
 }
 
 TEST(Output, JsonHasSummaryAndRuns) {

@@ -1,6 +1,5 @@
-// --mode forward|ceiling (issue 24): the head lock follows the mode, ceiling mode is refused by
-// demo with a message saying what runs it, and on real robots by teach and replay, and the
-// ceiling pitch is range-checked.
+// --mode forward|ceiling (issue 24): the head lock follows the mode, ceiling mode is refused on
+// real robots by teach and replay, and the ceiling pitch is range-checked.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -31,19 +30,10 @@ TEST(SessionMode, HeadLockTakesTheCeilingPitchInCeilingMode) {
   EXPECT_GE(AppConfig{}.robot.ceiling_head_pitch_rad, -0.707);
 }
 
-TEST(SessionMode, ModesParseAndCeilingIsRefusedSayingWhatExists) {
+TEST(SessionMode, ModesParse) {
   EXPECT_EQ(parse_mode("forward"), core::NavMode::kForward);
   EXPECT_EQ(parse_mode("ceiling"), core::NavMode::kCeiling);
   EXPECT_THROW(parse_mode("sideways"), ConfigError);
-  EXPECT_NO_THROW(refuse_unimplemented_mode(core::NavMode::kForward, "demo"));
-  try {
-    refuse_unimplemented_mode(core::NavMode::kCeiling, "demo");
-    FAIL() << "ceiling mode was not refused";
-  } catch (const ModeUnavailableError& e) {
-    EXPECT_THAT(e.what(), AllOf(HasSubstr("demo --mode ceiling"), HasSubstr("replay"),
-                                HasSubstr("evaluate"), HasSubstr("demo does not run it yet"),
-                                HasSubstr("docs/method/ceiling.md"), HasSubstr("--mode forward")));
-  }
 }
 
 TEST(SessionMode, CeilingModeIsRefusedOnRealRobotsOnly) {
