@@ -230,27 +230,17 @@ constexpr double kPassedByCommandsFactor = 2.0;
 // --disturbance light --light-factor 1.4 --trace DIR`).
 constexpr double kFloorLineMaxAngleRad = 0.5;
 
-// A vision fix moves the odometry estimate this far towards itself (1: all the way), times the
-// fix's weight against the prediction (vnhv_omega: 1 at the prediction, 0 at the gate). Half: one
-// fix's noise (a few cm laterally, more along the segment) is halved, and two or three located
-// frames remove the drift of a dead-reckoned turn.
-constexpr double kFixGain = 0.5;
 // The heading of the odometry estimate has a sigma (heading_sigma_rad_), the odometry's error
 // model: it grows by kOdometryYawErrorPerRad of every turn and kOdometryYawErrorPerM per metre
 // (margins above the mock's model of wheel odometry, 3 % of the turn and 0.001 rad/s of bias,
 // docs/mock_robot.md "Odometry"; not measured on a real Pepper), is kPlacedHeadingSigmaRad when a
 // (re)localisation places the estimate at a key image's taught pose, and shrinks with each VNHV
-// fix (whose own heading is good to about kFixHeadingSigmaRad). Where no VNHV fix corrects the
+// fix (kFixErrors below). Where no VNHV fix corrects the
 // estimate, the heading relative to IN from the matched horizontal lines (geometry/line_yaw.hpp)
 // corrects the heading by a Kalman gain, gated at kHeadingGateSigmas.
 constexpr double kOdometryYawErrorPerRad = 0.05;
 constexpr double kOdometryYawErrorPerM = 0.01;
 constexpr double kPlacedHeadingSigmaRad = 0.1;
-// A VNHV fix's own errors against the ground truth, room_corridor_room, VGA, no disturbance,
-// straight segments, 1504 fixes (evaluate --run 1 --trace; telemetry vnhv_fix_lateral_m and
-// vnhv_fix_heading_rad against the trace's gt): lateral RMS 0.65 cm, p99 2.6 cm, max 5.5 cm;
-// heading RMS 0.002 rad, p99 0.008 rad, max 0.017 rad. The sigmas below are about those p99s.
-constexpr double kFixHeadingSigmaRad = 0.01;
 constexpr double kMinLineYawSigmaRad = 0.005;  // the lines' own sigma, floored: sway, lens
 constexpr double kHeadingGateSigmas = 3.0;
 // The estimate's position sigmas along and across the robot's heading (along_sigma_m_,
@@ -258,12 +248,26 @@ constexpr double kHeadingGateSigmas = 3.0;
 // metre (a margin above the mock's 1.5 % scale error), across by the heading's sigma times the
 // metre (a heading error turns into a sideways one); both are kPlacedPositionSigmaM when a
 // (re)localisation places the estimate at a key image's taught pose (starts are up to 0.4 m along
-// and 0.2 m across from it), and shrink with each VNHV fix, whose own position is good to about
-// kFixPositionSigmaM across and kFixAlongSigmaM along (the points' depth).
+// and 0.2 m across from it), and shrink with each VNHV fix (kFixErrors below). A lateral sigma of
+// kLocatedLateralSigmaM or less counts as located across the path (floor lines: the odometry may
+// steer, as after a VNHV fix).
 constexpr double kOdometryDistanceErrorPerM = 0.03;
 constexpr double kPlacedPositionSigmaM = 0.5;
-constexpr double kFixPositionSigmaM = 0.03;
-constexpr double kFixAlongSigmaM = 0.15;
+constexpr double kLocatedLateralSigmaM = 0.03;
+// A VNHV fix's error is mostly its segment's, shared by every fix of the segment, and of one of
+// two sizes: the room's model (measured, room_corridor_room, VGA, no disturbance, 36 straight
+// segments, `evaluate --run 1 --trace`: per-segment mean lateral error RMS 0.44 cm, max 1.45 cm;
+// heading RMS 0.0035 rad) or a moved object's (moved furniture: 10-35 cm, 0.03-0.13 rad). The
+// update weighs both (fix_error_mixture.hpp); each fix also has its own noise (within a segment,
+// lateral RMS 0.46 cm; a fix's whole error: lateral RMS 0.65 cm, p99 2.6 cm, heading RMS 0.002
+// rad, p99 0.008 rad over 1504 fixes). Along the axis (the points' depth) nothing was measured:
+// 5 cm for the room's shared error and for the noise, a guess. A fix's weight against the prediction (Tukey's,
+// vnhv_omega) divides the noise variances: a fix near the gate's edge hardly moves the estimate.
+constexpr FixErrorMixtureOptions kFixErrors{
+    /*usual_sigma=*/{0.05, 0.01, 0.005},
+    /*moved_sigma=*/{0.5, 0.3, 0.1},
+    /*noise_sigma=*/{0.05, 0.01, 0.003},
+    /*moved_prior=*/0.1};
 // Turning on the spot on odometry: yaw rate per radian still to turn, 1/s; and the heading error
 // (rad) beyond which the robot turns on the spot before driving on.
 constexpr double kTurnGain_1_s = 1.5;
@@ -318,8 +322,11 @@ void Navigator::reset() {
   odom_since_fix_m_ = 1e9;
   heading_sigma_rad_ = kPlacedHeadingSigmaRad;
   along_sigma_m_ = lateral_sigma_m_ = kPlacedPositionSigmaM;
+  begin_fix_errors();
   drift_report_pending_ = false;
 }
+
+void Navigator::begin_fix_errors() { fix_errors_.begin(kFixErrors); }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
   const int last = seg.next_next.value_or(seg.next);
@@ -438,6 +445,7 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
         tracker_.set(best, *odom_, report.result.segment->prev);
         heading_sigma_rad_ = kPlacedHeadingSigmaRad;
         along_sigma_m_ = lateral_sigma_m_ = kPlacedPositionSigmaM;
+        begin_fix_errors();
       } else {
         tracker_.set(*X, *odom_, report.result.segment->prev);
       }
@@ -586,6 +594,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     vnhv_segment_next_ = seg.next;
     vnhv_filter_.reset();
     vnhv_model_.reset();
+    begin_fix_errors();  // a new model: its fixes' shared error is new too
     vnhv_pose_ = o.pose;
     const double taught_m = segment_taught_m();
     const features::TwoViewMatches next_prev =
@@ -667,36 +676,58 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     }
   }
   if (fix && fix->within_prior && fix_weight > 0.0) {
-    // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
-    past_next = arc ? fix->pose.x_m > 0.0
-                    : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
-    if (auto dev = deviation_of(fix->pose)) {
-      tel.vnhv_fix_lateral_m = dev->lateral_m;
-      tel.vnhv_fix_heading_rad = dev->heading_rad;
-      vnhv_filter_.correct(*dev, tel.t_ns, fix_weight);
-    }
+    // With odometry, the estimate takes the fix first: its update also says how likely the
+    // segment's fixes are the room's rather than a moved object's (fix_error_mixture.hpp).
+    double room_probability = 1.0;
     if (odom_ && tracker_.usable()) {
       // The fix is the robot's pose in IN's frame, in segment units: in metres, from IN's taught
       // pose, it is where the robot is on the taught path.
       const OdometryPose in_next{fix->pose.x_m * vnhv_m_per_unit_,
                                  fix->pose.y_m * vnhv_m_per_unit_, fix->pose.yaw_rad};
-      const double gain = kFixGain * fix_weight;
-      fix_correction_ = tracker_.correct(compose(tracker_.taught(seg.next), in_next), gain);
-      heading_sigma_rad_ =
-          std::hypot((1.0 - gain) * heading_sigma_rad_, gain * kFixHeadingSigmaRad);
-      along_sigma_m_ = std::hypot((1.0 - gain) * along_sigma_m_, gain * kFixAlongSigmaM);
-      lateral_sigma_m_ = std::hypot((1.0 - gain) * lateral_sigma_m_, gain * kFixPositionSigmaM);
-      if (seg.next + 1 == static_cast<int>(map_.key_images.size())) {
-        final_fix_.emplace(in_next, tel.t_ns);
+      const OdometryPose fix_teach = compose(tracker_.taught(seg.next), in_next);
+      if (!tracker_.estimate()) {
+        fix_correction_ = tracker_.correct(fix_teach, 1.0);
+      } else {
+        // Per axis of the robot, against the error this segment's fixes share.
+        const OdometryPose y = between(*tracker_.estimate(), fix_teach);
+        fix_correction_ = std::make_pair(std::hypot(y.x_m, y.y_m), std::abs(y.yaw_rad));
+        Axes3 var{along_sigma_m_ * along_sigma_m_, lateral_sigma_m_ * lateral_sigma_m_,
+                  heading_sigma_rad_ * heading_sigma_rad_};
+        const Axes3 d = fix_errors_.update(var, {y.x_m, y.y_m, y.yaw_rad}, fix_weight);
+        tracker_.shift(OdometryPose{d[0], d[1], d[2]});
+        along_sigma_m_ = std::sqrt(var[0]);
+        lateral_sigma_m_ = std::sqrt(var[1]);
+        heading_sigma_rad_ = std::sqrt(var[2]);
+        room_probability = fix_errors_.usual_probability();
+        tel.vnhv_fix_room_probability = room_probability;
       }
-      odom_since_fix_m_ = 0.0;
-      fixed_this_frame_ = true;
-      if (drift_report_pending_) {
-        // The first fix after a blind stretch: how far the odometry had drifted.
-        tel.drift_corrected_m = fix_correction_->first;
-        tel.drift_corrected_rad = fix_correction_->second;
-        drift_report_pending_ = false;
+      // A segment whose fixes are more likely a moved object's did not locate the robot.
+      if (room_probability >= 0.5) {
+        if (seg.next + 1 == static_cast<int>(map_.key_images.size())) {
+          final_fix_.emplace(in_next, tel.t_ns);
+        }
+        odom_since_fix_m_ = 0.0;
+        fixed_this_frame_ = true;
+        if (drift_report_pending_) {
+          // The first fix after a blind stretch: how far the odometry had drifted.
+          tel.drift_corrected_m = fix_correction_->first;
+          tel.drift_corrected_rad = fix_correction_->second;
+          drift_report_pending_ = false;
+        }
       }
+    }
+    if (room_probability >= 0.5) {
+      // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
+      past_next = arc ? fix->pose.x_m > 0.0
+                      : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
+      if (auto dev = deviation_of(fix->pose)) {
+        tel.vnhv_fix_lateral_m = dev->lateral_m;
+        tel.vnhv_fix_heading_rad = dev->heading_rad;
+        vnhv_filter_.correct(*dev, tel.t_ns, fix_weight * room_probability);
+      }
+    } else if (auto dev = deviation_of(fix->pose)) {
+      tel.vnhv_fix_lateral_m = dev->lateral_m;
+      tel.vnhv_fix_heading_rad = dev->heading_rad;
     }
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
@@ -1098,6 +1129,7 @@ void Navigator::correct_heading_from_lines(const LinePairs& pairs, int in, Telem
   const double gain = p / (p + r);
   tel.line_yaw_correction_rad = tracker_.correct_yaw(measured_yaw_rad, gain);
   heading_sigma_rad_ = std::sqrt((1.0 - gain) * p);
+  fix_errors_.rescale(2, p, (1.0 - gain) * p);
 }
 
 void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in,
@@ -1138,6 +1170,8 @@ void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in
   cov_in(1, 1) = lateral_var_m2;
   cov_in(0, 1) = cov_in(1, 0) = 0.0;
   const Eigen::Matrix2d cov_robot = R_m.transpose() * cov_in * R_m;
+  fix_errors_.rescale(0, var(0), cov_robot(0, 0));
+  fix_errors_.rescale(1, var(1), cov_robot(1, 1));
   along_sigma_m_ = std::sqrt(cov_robot(0, 0));
   lateral_sigma_m_ = std::sqrt(cov_robot(1, 1));
   tel.floor_lines = fix->inliers;
@@ -1145,7 +1179,7 @@ void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in
   tel.floor_lateral_after_m = base.y();
   // The lines located the robot across the path: the odometry may steer (odometry_steers), as
   // after a VNHV fix.
-  if (lateral_sigma_m_ <= kFixPositionSigmaM) odom_since_fix_m_ = 0.0;
+  if (lateral_sigma_m_ <= kLocatedLateralSigmaM) odom_since_fix_m_ = 0.0;
 }
 
 std::optional<control::PosePrior> Navigator::resection_prior(int in) const {
@@ -1154,17 +1188,22 @@ std::optional<control::PosePrior> Navigator::resection_prior(int in) const {
   }
   // Where the estimate puts the robot in IN's taught frame, in segment units; the camera's own
   // offset ahead of the base changes that by under a centimetre at the segments' yaws.
-  const OdometryPose p = between(tracker_.taught(in), *tracker_.estimate());
+  // The next fix is expected at the estimate plus the error this segment's fixes share so far.
+  const Axes3 shared = fix_errors_.expected();
+  const OdometryPose expected =
+      compose(*tracker_.estimate(), OdometryPose{shared[0], shared[1], shared[2]});
+  const OdometryPose p = between(tracker_.taught(in), expected);
   control::PosePrior prior;
   prior.pose = {p.x_m / vnhv_m_per_unit_, p.y_m / vnhv_m_per_unit_, p.yaw_rad};
   // The estimate's sigmas are along and across the robot; IN's axes are turned by p.yaw_rad from
   // them (the small correlation this leaves out does not matter at a gate).
   const double c2 = std::pow(std::cos(p.yaw_rad), 2), s2 = 1.0 - c2;
-  const double var_along = std::pow(along_sigma_m_, 2) + std::pow(kFixAlongSigmaM, 2);
-  const double var_lateral = std::pow(lateral_sigma_m_, 2) + std::pow(kFixPositionSigmaM, 2);
+  const Axes3 var = fix_errors_.expected_var(
+      {std::pow(along_sigma_m_, 2), std::pow(lateral_sigma_m_, 2), std::pow(heading_sigma_rad_, 2)});
+  const double var_along = var[0], var_lateral = var[1];
   prior.sigma_x = std::sqrt(c2 * var_along + s2 * var_lateral) / vnhv_m_per_unit_;
   prior.sigma_y = std::sqrt(s2 * var_along + c2 * var_lateral) / vnhv_m_per_unit_;
-  prior.sigma_yaw_rad = std::hypot(heading_sigma_rad_, kFixHeadingSigmaRad);
+  prior.sigma_yaw_rad = std::sqrt(var[2]);
   return prior;
 }
 

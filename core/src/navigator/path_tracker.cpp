@@ -90,6 +90,12 @@ std::pair<double, double> TaughtPathTracker::correct(const OdometryPose& X_fix, 
   return error;
 }
 
+void TaughtPathTracker::shift(const OdometryPose& delta) {
+  if (!X_) return;
+  moved_since_m_ += std::hypot(delta.x_m, delta.y_m);
+  X_ = compose(*X_, delta);
+}
+
 double TaughtPathTracker::correct_yaw(double yaw_teach_rad, double gain) {
   if (!X_) return 0.0;
   const double correction = gain * wrap(yaw_teach_rad - X_->yaw_rad);

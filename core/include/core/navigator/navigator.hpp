@@ -56,6 +56,7 @@
 #include "core/localization/key_image_logic.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "core/navigator/path_tracker.hpp"
+#include "core/navigator/fix_error_mixture.hpp"
 #include "core/navigator/telemetry.hpp"
 #include "core/navigator/transitions.hpp"
 
@@ -357,6 +358,12 @@ class Navigator {
   /// shrink with each VNHV fix. With heading_sigma_rad_ they are the prior that tells the room
   /// from a moved object in the resection (control::PosePrior).
   double along_sigma_m_ = 0.5, lateral_sigma_m_ = 0.5;
+  /// The error the current segment's VNHV fixes share, per axis of the robot (along, across,
+  /// heading), as the room's or a moved object's (fix_error_mixture.hpp): begun with each
+  /// segment model.
+  FixErrorMixture fix_errors_;
+  /// New segment model or a placed estimate: the shared fix errors start again.
+  void begin_fix_errors();
   /// This frame, odometry places the robot on a piece of the taught path that teaching turned on
   /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
   /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.

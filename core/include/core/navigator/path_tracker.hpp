@@ -82,6 +82,9 @@ class TaughtPathTracker {
   /// Pulls X towards a vision fix (teach frame) by `gain` in [0, 1] (1: take the fix). Returns
   /// the distance (m) and |heading| (rad) between the prediction and the fix.
   std::pair<double, double> correct(const OdometryPose& X_fix, double gain);
+  /// Moves X by `delta`, given in X's own frame (x along the robot, y across, yaw), e.g. a
+  /// correction computed per axis. No estimate: nothing happens.
+  void shift(const OdometryPose& delta);
   /// Pulls X's heading only towards a vision heading (teach frame, rad) by `gain` in [0, 1]
   /// (the relative yaw to a key image from lines: geometry/line_yaw.hpp). Returns the signed
   /// correction (rad); 0 without an estimate.

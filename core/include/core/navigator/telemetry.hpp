@@ -98,6 +98,10 @@ struct Telemetry {
   /// The fix's squared Mahalanobis distance to the odometry's prediction (control::PosePrior) and
   /// its weight (1 at the prediction, 0 at the gate); NaN without a prediction.
   double vnhv_fix_d2 = kNaN, vnhv_fix_weight = kNaN;
+  /// After an accepted fix with odometry: the probability that the segment's fixes come from the
+  /// room rather than from a moved object (navigator/fix_error_mixture.hpp). Below one half the
+  /// fix neither corrects the VNHV filter nor counts as the robot located.
+  double vnhv_fix_room_probability = kNaN;
   /// The odometry estimate's deviation from the current segment (the prediction the fixes are
   /// gated against) and its sigmas across and in heading; NaN without an odometry estimate.
   double odom_lateral_m = kNaN, odom_heading_rad = kNaN;

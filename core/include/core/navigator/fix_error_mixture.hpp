@@ -1,0 +1,65 @@
+#pragma once
+// The odometry estimate's update by a segment's VNHV fixes, when a segment's fixes may come from
+// the room or from an object moved since teaching.
+//
+// Why: every fix of a segment comes from one reconstruction (IN's triangulated points) and from
+// one rigid structure in it, so its error is mostly shared by the segment's fixes
+// (shared_fix_error.hpp). That shared error has two very different sizes: where the structure is
+// the room, a few millimetres (measured: room_corridor_room, VGA, no disturbance, 36 straight
+// segments: lateral RMS 0.44 cm, max 1.45 cm; heading RMS 0.0035 rad); where it is a moved shelf,
+// tens of centimetres and degrees (moved furniture: 10-35 cm, 0.03-0.13 rad). One Gaussian
+// cannot be both: a small sigma follows a moved shelf all the way (each fix is close to a
+// prediction that followed the previous ones), a large one under-uses the room's good fixes
+// (gen_room_1, light x0.7: a drifted estimate kept half its error into a turn; docs/method/
+// navigator.md "Fixes from the room or from a moved object").
+//
+// So two hypotheses per segment, each the shared-error model with its own sigma: "usual" (the
+// room) and "moved" (a moved object). Each fix updates both; their probabilities follow the
+// likelihood of the segment's fixes so far under each (a Gaussian-sum filter over the
+// segment); the estimate moves by the mixture of their corrections and its variance is the
+// mixture's. A few fixes that keep reading far from the odometry make "moved" likely, and then
+// they hardly move the estimate; fixes near it keep "usual" and are used as before.
+//
+// Axes: 0 along the robot, 1 across it, 2 heading (m, m, rad). Pure; not thread-safe.
+
+#include <array>
+
+#include "core/navigator/shared_fix_error.hpp"
+
+namespace pepper::core::navigator {
+
+using Axes3 = std::array<double, 3>;
+
+struct FixErrorMixtureOptions {
+  Axes3 usual_sigma{0.03, 0.01, 0.005};  ///< shared error when the structure is the room
+  Axes3 moved_sigma{0.5, 0.3, 0.1};      ///< shared error when it is a moved object
+  Axes3 noise_sigma{0.05, 0.01, 0.003};  ///< each fix's own white noise
+  double moved_prior = 0.1;              ///< probability of "moved" for a new segment, (0, 1)
+};
+
+class FixErrorMixture {
+ public:
+  /// A new segment model. Throws std::invalid_argument for sigmas <= 0 or a prior outside (0, 1).
+  void begin(const FixErrorMixtureOptions& options);
+  /// One fix: est_var (the estimate's variances, updated in place), the innovation (fix minus
+  /// estimate, robot axes) and the fix's weight in (0, 1] (divides the noise variance). Returns
+  /// the correction to add to the estimate.
+  Axes3 update(Axes3& est_var, const Axes3& innovation, double weight);
+  /// Another source changed axis `axis`'s variance from `before` to `after`.
+  void rescale(int axis, double before, double after);
+  /// Probability that this segment's structure is the room, given its fixes so far.
+  double usual_probability() const;
+  /// Where the room's next fix is expected (relative to the estimate) and that expectation's
+  /// variance, per axis: the "usual" hypothesis's. This is the resection's prior, which picks
+  /// the room among the structures in view (control::PosePrior); a moved object's structure is
+  /// what it must not pick, so its hypothesis does not widen the gate.
+  Axes3 expected() const;
+  Axes3 expected_var(const Axes3& est_var) const;
+
+ private:
+  FixErrorMixtureOptions options_;
+  std::array<SharedFixError, 3> usual_, moved_;
+  double log_odds_moved_ = 0.0;  ///< log P(moved) / P(usual)
+};
+
+}  // namespace pepper::core::navigator
