@@ -14,7 +14,7 @@ double log_density(double r, double s) { return -0.5 * (r * r / s + std::log(s))
 constexpr double kMaxLogOdds = 20.0;
 }  // namespace
 
-void FixErrorMixture::begin(const FixErrorMixtureOptions& options) {
+void FixErrorMixture::begin(const FixErrorMixtureOptions& options, const Axes3& est_var) {
   if (!(options.moved_prior > 0.0 && options.moved_prior < 1.0)) {
     throw std::invalid_argument("FixErrorMixture: moved_prior must be in (0, 1)");
   }
@@ -22,43 +22,77 @@ void FixErrorMixture::begin(const FixErrorMixtureOptions& options) {
     if (!(options.noise_sigma[a] > 0.0)) {
       throw std::invalid_argument("FixErrorMixture: noise sigmas must be > 0");
     }
-    usual_[a].begin(options.usual_sigma[a]);  // throws for sigma <= 0
-    moved_[a].begin(options.moved_sigma[a]);
+    if (!(est_var[a] > 0.0) || !std::isfinite(est_var[a])) {
+      throw std::invalid_argument("FixErrorMixture: the estimate's variances must be > 0");
+    }
+    usual_.error[a].begin(options.usual_sigma[a]);  // throws for sigma <= 0
+    moved_.error[a].begin(options.moved_sigma[a]);
   }
+  usual_.offset = moved_.offset = Axes3{};
+  usual_.var = moved_.var = est_var;
   options_ = options;
   log_odds_moved_ = std::log(options.moved_prior / (1.0 - options.moved_prior));
 }
 
-Axes3 FixErrorMixture::update(Axes3& est_var, const Axes3& innovation, double weight) {
+Axes3 FixErrorMixture::update(const Axes3& innovation, double weight) {
   if (!(weight > 0.0 && weight <= 1.0)) {
     throw std::invalid_argument("FixErrorMixture: the fix's weight must be in (0, 1]");
   }
-  Axes3 c_usual{}, c_moved{}, v_usual = est_var, v_moved = est_var;
   double log_ratio = 0.0;  // log p(fix | moved) - log p(fix | usual)
   for (int a = 0; a < 3; ++a) {
     const double r_var = options_.noise_sigma[a] * options_.noise_sigma[a] / weight;
-    log_ratio += log_density(innovation[a] - moved_[a].expected(),
-                             moved_[a].expected_var(est_var[a], r_var)) -
-                 log_density(innovation[a] - usual_[a].expected(),
-                             usual_[a].expected_var(est_var[a], r_var));
-    c_usual[a] = usual_[a].update(v_usual[a], innovation[a], r_var);
-    c_moved[a] = moved_[a].update(v_moved[a], innovation[a], r_var);
+    double ll[2];
+    Hypothesis* hs[2] = {&usual_, &moved_};
+    for (int k = 0; k < 2; ++k) {
+      Hypothesis& h = *hs[k];
+      const double y = innovation[a] - h.offset[a];  // against this hypothesis's estimate
+      ll[k] = log_density(y - h.error[a].expected(), h.error[a].expected_var(h.var[a], r_var));
+      h.offset[a] += h.error[a].update(h.var[a], y, r_var);
+    }
+    log_ratio += ll[1] - ll[0];
   }
   log_odds_moved_ = std::clamp(log_odds_moved_ + log_ratio, -kMaxLogOdds, kMaxLogOdds);
-  const double p_usual = usual_probability();
-  Axes3 correction{};
+  // The mixture's mean moves; both offsets are re-referenced to it.
+  const double p = usual_probability();
+  Axes3 move{};
   for (int a = 0; a < 3; ++a) {
-    correction[a] = p_usual * c_usual[a] + (1.0 - p_usual) * c_moved[a];
-    const double du = c_usual[a] - correction[a], dm = c_moved[a] - correction[a];
-    est_var[a] = p_usual * (v_usual[a] + du * du) + (1.0 - p_usual) * (v_moved[a] + dm * dm);
+    move[a] = p * usual_.offset[a] + (1.0 - p) * moved_.offset[a];
+    usual_.offset[a] -= move[a];
+    moved_.offset[a] -= move[a];
   }
-  return correction;
+  return move;
+}
+
+Axes3 FixErrorMixture::variance() const {
+  const double p = usual_probability();
+  Axes3 v{};
+  for (int a = 0; a < 3; ++a) {
+    v[a] = p * (usual_.var[a] + usual_.offset[a] * usual_.offset[a]) +
+           (1.0 - p) * (moved_.var[a] + moved_.offset[a] * moved_.offset[a]);
+  }
+  return v;
+}
+
+void FixErrorMixture::grow(int axis, double d_sigma) {
+  if (axis < 0 || axis > 2) throw std::invalid_argument("FixErrorMixture: axis must be 0, 1 or 2");
+  if (!(d_sigma >= 0.0) || !std::isfinite(d_sigma)) {
+    throw std::invalid_argument("FixErrorMixture: a growth must be >= 0 and finite");
+  }
+  for (Hypothesis* h : {&usual_, &moved_}) {
+    const double s = std::sqrt(h->var[axis]) + d_sigma;
+    h->var[axis] = s * s;
+  }
 }
 
 void FixErrorMixture::rescale(int axis, double before, double after) {
   if (axis < 0 || axis > 2) throw std::invalid_argument("FixErrorMixture: axis must be 0, 1 or 2");
-  usual_[axis].rescale(before, after);
-  moved_[axis].rescale(before, after);
+  if (!(before > 0.0) || !std::isfinite(before) || !(after > 0.0) || !std::isfinite(after)) {
+    throw std::invalid_argument("FixErrorMixture: variances must be > 0 and finite");
+  }
+  for (Hypothesis* h : {&usual_, &moved_}) {
+    h->var[axis] *= after / before;
+    h->error[axis].rescale(before, after);
+  }
 }
 
 double FixErrorMixture::usual_probability() const {
@@ -67,14 +101,15 @@ double FixErrorMixture::usual_probability() const {
 
 Axes3 FixErrorMixture::expected() const {
   Axes3 e{};
-  for (int a = 0; a < 3; ++a) e[a] = usual_[a].expected();
+  for (int a = 0; a < 3; ++a) e[a] = usual_.offset[a] + usual_.error[a].expected();
   return e;
 }
 
-Axes3 FixErrorMixture::expected_var(const Axes3& est_var) const {
+Axes3 FixErrorMixture::expected_var() const {
   Axes3 v{};
   for (int a = 0; a < 3; ++a) {
-    v[a] = usual_[a].expected_var(est_var[a], options_.noise_sigma[a] * options_.noise_sigma[a]);
+    v[a] = usual_.error[a].expected_var(usual_.var[a],
+                                        options_.noise_sigma[a] * options_.noise_sigma[a]);
   }
   return v;
 }

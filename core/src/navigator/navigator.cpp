@@ -326,7 +326,10 @@ void Navigator::reset() {
   drift_report_pending_ = false;
 }
 
-void Navigator::begin_fix_errors() { fix_errors_.begin(kFixErrors); }
+void Navigator::begin_fix_errors() {
+  fix_errors_.begin(kFixErrors, {along_sigma_m_ * along_sigma_m_, lateral_sigma_m_ * lateral_sigma_m_,
+                                 heading_sigma_rad_ * heading_sigma_rad_});
+}
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
   const int last = seg.next_next.value_or(seg.next);
@@ -691,10 +694,9 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
         // Per axis of the robot, against the error this segment's fixes share.
         const OdometryPose y = between(*tracker_.estimate(), fix_teach);
         fix_correction_ = std::make_pair(std::hypot(y.x_m, y.y_m), std::abs(y.yaw_rad));
-        Axes3 var{along_sigma_m_ * along_sigma_m_, lateral_sigma_m_ * lateral_sigma_m_,
-                  heading_sigma_rad_ * heading_sigma_rad_};
-        const Axes3 d = fix_errors_.update(var, {y.x_m, y.y_m, y.yaw_rad}, fix_weight);
+        const Axes3 d = fix_errors_.update({y.x_m, y.y_m, y.yaw_rad}, fix_weight);
         tracker_.shift(OdometryPose{d[0], d[1], d[2]});
+        const Axes3 var = fix_errors_.variance();
         along_sigma_m_ = std::sqrt(var[0]);
         lateral_sigma_m_ = std::sqrt(var[1]);
         heading_sigma_rad_ = std::sqrt(var[2]);
@@ -1059,10 +1061,16 @@ void Navigator::follow_odometry(const Frame& frame) {
     }
     // The odometry's heading error grows with every turn and every metre (systematic errors:
     // their bounds add up linearly).
-    along_sigma_m_ += kOdometryDistanceErrorPerM * moved_m;
-    lateral_sigma_m_ += heading_sigma_rad_ * moved_m;
-    heading_sigma_rad_ += kOdometryYawErrorPerRad * std::abs(d.yaw_rad) +
-                          kOdometryYawErrorPerM * moved_m;
+    const double d_along = kOdometryDistanceErrorPerM * moved_m;
+    const double d_lateral = heading_sigma_rad_ * moved_m;
+    const double d_heading =
+        kOdometryYawErrorPerRad * std::abs(d.yaw_rad) + kOdometryYawErrorPerM * moved_m;
+    along_sigma_m_ += d_along;
+    lateral_sigma_m_ += d_lateral;
+    heading_sigma_rad_ += d_heading;
+    fix_errors_.grow(0, d_along);
+    fix_errors_.grow(1, d_lateral);
+    fix_errors_.grow(2, d_heading);
   }
   tracker_.predict(*frame.odom);
   odom_ = frame.odom;
@@ -1198,8 +1206,7 @@ std::optional<control::PosePrior> Navigator::resection_prior(int in) const {
   // The estimate's sigmas are along and across the robot; IN's axes are turned by p.yaw_rad from
   // them (the small correlation this leaves out does not matter at a gate).
   const double c2 = std::pow(std::cos(p.yaw_rad), 2), s2 = 1.0 - c2;
-  const Axes3 var = fix_errors_.expected_var(
-      {std::pow(along_sigma_m_, 2), std::pow(lateral_sigma_m_, 2), std::pow(heading_sigma_rad_, 2)});
+  const Axes3 var = fix_errors_.expected_var();
   const double var_along = var[0], var_lateral = var[1];
   prior.sigma_x = std::sqrt(c2 * var_along + s2 * var_lateral) / vnhv_m_per_unit_;
   prior.sigma_y = std::sqrt(s2 * var_along + c2 * var_lateral) / vnhv_m_per_unit_;

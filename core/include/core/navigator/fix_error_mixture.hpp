@@ -16,8 +16,11 @@
 // So two hypotheses per segment, each the shared-error model with its own sigma: "usual" (the
 // room) and "moved" (a moved object). Each fix updates both; their probabilities follow the
 // likelihood of the segment's fixes so far under each (a Gaussian-sum filter over the
-// segment); the estimate moves by the mixture of their corrections and its variance is the
-// mixture's. A few fixes that keep reading far from the odometry make "moved" likely, and then
+// segment: each hypothesis keeps its own estimate, as an offset from the mixture's mean); the
+// estimate is the mixture's mean and its variance the mixture's. (A first version collapsed the
+// two into one estimate after every fix; then each hypothesis's shared-error estimate no longer
+// matched the estimate it was made for, and after a placement "moved" won on fixes that agreed
+// with the estimate: DeadReckoning.TelemetryShowsThePredictionTheFixesAreWeighedAgainst.) A few fixes that keep reading far from the odometry make "moved" likely, and then
 // they hardly move the estimate; fixes near it keep "usual" and are used as before.
 //
 // Axes: 0 along the robot, 1 across it, 2 heading (m, m, rad). Pure; not thread-safe.
@@ -39,13 +42,19 @@ struct FixErrorMixtureOptions {
 
 class FixErrorMixture {
  public:
-  /// A new segment model. Throws std::invalid_argument for sigmas <= 0 or a prior outside (0, 1).
-  void begin(const FixErrorMixtureOptions& options);
-  /// One fix: est_var (the estimate's variances, updated in place), the innovation (fix minus
-  /// estimate, robot axes) and the fix's weight in (0, 1] (divides the noise variance). Returns
-  /// the correction to add to the estimate.
-  Axes3 update(Axes3& est_var, const Axes3& innovation, double weight);
-  /// Another source changed axis `axis`'s variance from `before` to `after`.
+  /// A new segment model (or a placed estimate), from the estimate's variances now. Throws
+  /// std::invalid_argument for sigmas <= 0, a prior outside (0, 1) or a variance <= 0.
+  void begin(const FixErrorMixtureOptions& options, const Axes3& est_var);
+  /// One fix: the innovation (fix minus the estimate, robot axes) and the fix's weight in
+  /// (0, 1] (divides the noise variance). Each hypothesis updates its own estimate; returns the
+  /// move of the mixture's mean, by which the caller moves the estimate.
+  Axes3 update(const Axes3& innovation, double weight);
+  /// The mixture's variance per axis (the estimate's, for the caller's sigmas).
+  Axes3 variance() const;
+  /// The odometry grew axis `axis`'s sigma by `d_sigma` (>= 0): every hypothesis's too.
+  void grow(int axis, double d_sigma);
+  /// Another source corrected the estimate's axis `axis` by a Kalman update that took its
+  /// variance from `before` to `after`: every hypothesis's variance scales alike.
   void rescale(int axis, double before, double after);
   /// Probability that this segment's structure is the room, given its fixes so far.
   double usual_probability() const;
@@ -54,11 +63,16 @@ class FixErrorMixture {
   /// the room among the structures in view (control::PosePrior); a moved object's structure is
   /// what it must not pick, so its hypothesis does not widen the gate.
   Axes3 expected() const;
-  Axes3 expected_var(const Axes3& est_var) const;
+  Axes3 expected_var() const;
 
  private:
+  struct Hypothesis {
+    std::array<SharedFixError, 3> error;
+    Axes3 offset{};  ///< this hypothesis's estimate minus the mixture's mean
+    Axes3 var{};     ///< this hypothesis's estimate variance
+  };
   FixErrorMixtureOptions options_;
-  std::array<SharedFixError, 3> usual_, moved_;
+  Hypothesis usual_, moved_;
   double log_odds_moved_ = 0.0;  ///< log P(moved) / P(usual)
 };
 
