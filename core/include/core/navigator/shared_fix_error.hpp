@@ -8,10 +8,11 @@
 // An update that takes each fix as independent trusts a segment's fixes more with every frame,
 // so a structure whose error grows slowly (a moved, turned shelf: the robot drives the taught
 // path turned about it) is followed all the way: each fix is close to a prediction that followed
-// the previous fixes. Measured in room_corridor_room with moved furniture (VGA, run 1,
-// docs/method/navigator.md "Shared fix error"): the fixes' heading drifted 0.07 rad from the
-// truth over 1.2 m, about six times the odometry's own heading error over that distance, and
-// every one of them was inside the gate.
+// the previous fixes. Measured in room_corridor_room with moved furniture (VGA, run 1;
+// docs/method/navigator.md "Fixes from the room or from a moved object"): the fixes' heading
+// drifted 0.07 rad from the truth over 1.2 m, about six times the odometry's own heading error
+// over that distance, and every one of them was inside the gate. fix_error_mixture.hpp uses
+// this model twice, for the room's shared error and for a moved object's.
 //
 // Model, per axis, with e the estimate's error and b the segment's shared fix error:
 //   fix - estimate = e + b + n,  n white with variance R (divided by the fix's weight),
