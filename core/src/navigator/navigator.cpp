@@ -299,6 +299,7 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
   if (map_.key_images.size() < 2) {
     throw std::invalid_argument("Navigator: the map has fewer than 2 key images");
   }
+  begin_fix_errors();
 }
 
 void Navigator::reset() {
