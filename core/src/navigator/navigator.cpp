@@ -261,8 +261,9 @@ constexpr double kLocatedLateralSigmaM = 0.03;
 // update weighs both (fix_error_mixture.hpp); each fix also has its own noise (within a segment,
 // lateral RMS 0.46 cm; a fix's whole error: lateral RMS 0.65 cm, p99 2.6 cm, heading RMS 0.002
 // rad, p99 0.008 rad over 1504 fixes). Along the axis (the points' depth) nothing was measured:
-// 5 cm for the room's shared error and for the noise, a guess. A fix's weight against the prediction (Tukey's,
-// vnhv_omega) divides the noise variances: a fix near the gate's edge hardly moves the estimate.
+// 5 cm for the room's shared error and for the noise, a guess. A fix's weight against the
+// prediction (Tukey's, vnhv_omega) divides the noise variances: a fix near the gate's edge hardly
+// moves the estimate.
 constexpr FixErrorMixtureOptions kFixErrors{
     /*usual_sigma=*/{0.05, 0.01, 0.005},
     /*moved_sigma=*/{0.5, 0.3, 0.1},
@@ -719,18 +720,16 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
         }
       }
     }
-    if (room_probability >= 0.5) {
+    const bool room = room_probability >= 0.5;
+    if (room) {
       // Past IN: beyond the normal through IN to the arc's tangent there (+x), or to the chord.
       past_next = arc ? fix->pose.x_m > 0.0
                       : prev.x_m * fix->pose.x_m + prev.y_m * fix->pose.y_m < 0.0;
-      if (auto dev = deviation_of(fix->pose)) {
-        tel.vnhv_fix_lateral_m = dev->lateral_m;
-        tel.vnhv_fix_heading_rad = dev->heading_rad;
-        vnhv_filter_.correct(*dev, tel.t_ns, fix_weight * room_probability);
-      }
-    } else if (auto dev = deviation_of(fix->pose)) {
+    }
+    if (auto dev = deviation_of(fix->pose)) {
       tel.vnhv_fix_lateral_m = dev->lateral_m;
       tel.vnhv_fix_heading_rad = dev->heading_rad;
+      if (room) vnhv_filter_.correct(*dev, tel.t_ns, fix_weight * room_probability);
     }
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
