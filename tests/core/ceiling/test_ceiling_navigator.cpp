@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "core/ceiling/ceiling_navigator.hpp"
+#include "synthetic_ceiling.hpp"
 
 namespace pepper::core::ceiling {
 namespace {
@@ -19,68 +20,32 @@ namespace nav = core::navigator;
 
 constexpr int64_t kFrameNs = 66'666'667;  // 15 Hz
 
-struct Ceiling {
-  std::vector<cv::Point2d> points;
-  cv::Mat descriptors;
-};
+using Ceiling = test_support::SyntheticCeiling;
 
 // Points every 0.1 m (jittered) over x in [-1, 7], y in [-2, 5]: the tours below and their
 // views stay inside.
 Ceiling make_ceiling(uint32_t seed) {
-  Ceiling c;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-0.5, 0.5);
-  for (int i = 0; i < 80; ++i)
-    for (int j = 0; j < 70; ++j)
-      c.points.emplace_back(-1.0 + 0.1 * i + 0.03 * u(rng), -2.0 + 0.1 * j + 0.03 * u(rng));
-  c.descriptors.create(static_cast<int>(c.points.size()), kMosaicDescriptorBytes, CV_8U);
-  cv::randu(c.descriptors, 0, 256);
-  return c;
+  return test_support::make_synthetic_ceiling(seed, -1.0, 80, -2.0, 70);
 }
 
 Mosaic mosaic_of(const Ceiling& c) {
   Mosaic m;
   m.px_per_m = 120.0;
-  for (size_t k = 0; k < c.points.size(); ++k) {
+  for (size_t k = 0; k < c.points_world.size(); ++k) {
     MosaicLandmark l;
     l.id = static_cast<int64_t>(k);
-    l.position_m = c.points[k];
+    l.position_m = c.points_world[k];
     l.descriptor = c.descriptors.row(static_cast<int>(k)).clone();
     m.landmarks.push_back(l);
   }
   return m;
 }
 
-// What a base at T_world_base sees (0.3..1.3 m ahead, +-0.6 m left), or, with blind, random
-// junk only (a view the mosaic does not know).
+// What a base at T_world_base sees, or, with blind, random junk only (a view the mosaic does
+// not know).
 CeilingObservation see(const Ceiling& c, const PlanarPose& T_world_base, std::mt19937& rng,
                        bool blind = false) {
-  CeilingObservation o;
-  const PlanarPose T_base_world = T_world_base.inverse();
-  std::vector<cv::Mat> rows;
-  if (!blind) {
-    for (size_t k = 0; k < c.points.size(); ++k) {
-      const cv::Point2d p = T_base_world.apply(c.points[k]);
-      if (p.x < 0.3 || p.x > 1.3 || std::abs(p.y) > 0.6) continue;
-      o.p_base_m.push_back(p);
-      rows.push_back(c.descriptors.row(static_cast<int>(k)));
-    }
-  } else {
-    std::uniform_real_distribution<double> fwd(0.3, 1.3), left(-0.6, 0.6);
-    for (int j = 0; j < 80; ++j) {
-      o.p_base_m.emplace_back(fwd(rng), left(rng));
-      cv::Mat d(1, kMosaicDescriptorBytes, CV_8U);
-      cv::randu(d, 0, 256);
-      rows.push_back(d);
-    }
-  }
-  for (size_t i = 0; i < o.p_base_m.size(); ++i) {
-    o.orientation_base_rad.push_back(0.0);
-    o.p_canon_px.emplace_back(static_cast<float>(i), 0.0f);
-    o.orientation_canon_rad.push_back(0.0);
-  }
-  cv::vconcat(rows, o.descriptors);
-  return o;
+  return test_support::see_synthetic(c, T_world_base, rng, blind ? 80 : 0, blind);
 }
 
 CeilingTour tour_of(const std::vector<PlanarPose>& relays) {

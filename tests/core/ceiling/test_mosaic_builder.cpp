@@ -11,59 +11,23 @@
 
 #include "core/ceiling/mosaic_builder.hpp"
 #include "core/ceiling/mosaic_localiser.hpp"
+#include "synthetic_ceiling.hpp"
 
 namespace pepper::core::ceiling {
 namespace {
 
-struct Ceiling {
-  std::vector<cv::Point2d> points_world;
-  cv::Mat descriptors;  // one random 32-byte row per point
-};
+using Ceiling = test_support::SyntheticCeiling;
 
+// A ceiling over x in [0, 6], y in [-1, 1].
 Ceiling make_ceiling(uint32_t seed) {
-  Ceiling c;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-0.5, 0.5);
-  for (int i = 0; i < 60; ++i)
-    for (int j = 0; j < 20; ++j)
-      c.points_world.emplace_back(0.1 * i + 0.03 * u(rng), -1.0 + 0.1 * j + 0.03 * u(rng));
-  c.descriptors.create(static_cast<int>(c.points_world.size()), kMosaicDescriptorBytes, CV_8U);
-  cv::randu(c.descriptors, 0, 256);
-  return c;
+  return test_support::make_synthetic_ceiling(seed, 0.0, 60, -1.0, 20);
 }
 
-cv::Mat random_descriptor(std::mt19937& rng) {
-  cv::Mat d(1, kMosaicDescriptorBytes, CV_8U);
-  for (int b = 0; b < kMosaicDescriptorBytes; ++b)
-    d.at<uint8_t>(0, b) = static_cast<uint8_t>(rng());
-  return d;
-}
-
-// What a base at T_world_base sees: the points within 1 m ahead-ish (0.3..1.3 m forward, +-0.6 m
-// left), plus `junk` points with random descriptors (a person, a moved lamp).
+// What a base at T_world_base sees, plus `junk` points with random descriptors (a person, a
+// moved lamp).
 CeilingObservation see(const Ceiling& c, const PlanarPose& T_world_base, int junk,
                        std::mt19937& rng) {
-  CeilingObservation o;
-  const PlanarPose T_base_world = T_world_base.inverse();
-  std::vector<cv::Mat> rows;
-  for (size_t k = 0; k < c.points_world.size(); ++k) {
-    const cv::Point2d p = T_base_world.apply(c.points_world[k]);
-    if (p.x < 0.3 || p.x > 1.3 || std::abs(p.y) > 0.6) continue;
-    o.p_base_m.push_back(p);
-    rows.push_back(c.descriptors.row(static_cast<int>(k)));
-  }
-  std::uniform_real_distribution<double> fwd(0.3, 1.3), left(-0.6, 0.6);
-  for (int j = 0; j < junk; ++j) {
-    o.p_base_m.emplace_back(fwd(rng), left(rng));
-    rows.push_back(random_descriptor(rng));
-  }
-  for (size_t i = 0; i < o.p_base_m.size(); ++i) {
-    o.orientation_base_rad.push_back(0.0);
-    o.p_canon_px.emplace_back(static_cast<float>(i), 0.0f);
-    o.orientation_canon_rad.push_back(0.0);
-  }
-  cv::vconcat(rows, o.descriptors);
-  return o;
+  return test_support::see_synthetic(c, T_world_base, rng, junk);
 }
 
 TEST(MosaicBuilder, ChainsExactPosesAndKeepsOnlyLandmarksSeenConsistently) {
