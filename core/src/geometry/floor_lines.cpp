@@ -279,6 +279,7 @@ std::optional<FloorFix> estimate_floor_position(
     fix.t_m = best.t;
     fix.cov_m2 = best.cov;
     fix.info_1_m2 = info;
+    fix.info_vec_1_m = rhs;
     fix.inliers = inliers;
   }
   // Directions the lines inform only weakly keep the prior's position and covariance: a corridor's

@@ -39,7 +39,13 @@ Axes3 FixErrorMixture::update(const Axes3& innovation, double weight) {
     throw std::invalid_argument("FixErrorMixture: the fix's weight must be in (0, 1]");
   }
   double log_ratio = 0.0;  // log p(fix | moved) - log p(fix | usual)
+  bool any = false;
   for (int a = 0; a < 3; ++a) {
+    if (std::isnan(innovation[a])) continue;  // this source does not measure the axis
+    if (!std::isfinite(innovation[a])) {
+      throw std::invalid_argument("FixErrorMixture: an innovation must be finite or NaN");
+    }
+    any = true;
     const double r_var = options_.noise_sigma[a] * options_.noise_sigma[a] / weight;
     double ll[2];
     Hypothesis* hs[2] = {&usual_, &moved_};
@@ -51,6 +57,7 @@ Axes3 FixErrorMixture::update(const Axes3& innovation, double weight) {
     }
     log_ratio += ll[1] - ll[0];
   }
+  if (!any) return Axes3{};
   log_odds_moved_ = std::clamp(log_odds_moved_ + log_ratio, -kMaxLogOdds, kMaxLogOdds);
   // The mixture's mean moves; both offsets are re-referenced to it.
   const double p = usual_probability();

@@ -77,16 +77,16 @@ void TaughtPathTracker::predict(const OdometryPose& odom) {
   last_odom_ = odom;
 }
 
-std::pair<double, double> TaughtPathTracker::correct(const OdometryPose& X_fix, double gain) {
+std::pair<double, double> TaughtPathTracker::correct(const OdometryPose& X_fix) {
   if (!X_) {
     X_ = X_fix;
     return {0.0, 0.0};
   }
   const double dx = X_fix.x_m - X_->x_m, dy = X_fix.y_m - X_->y_m;
-  const double dyaw = wrap(X_fix.yaw_rad - X_->yaw_rad);
-  const std::pair<double, double> error{std::hypot(dx, dy), std::abs(dyaw)};
-  moved_since_m_ += gain * error.first;
-  X_ = OdometryPose{X_->x_m + gain * dx, X_->y_m + gain * dy, wrap(X_->yaw_rad + gain * dyaw)};
+  const std::pair<double, double> error{std::hypot(dx, dy),
+                                        std::abs(wrap(X_fix.yaw_rad - X_->yaw_rad))};
+  moved_since_m_ += error.first;
+  X_ = OdometryPose{X_fix.x_m, X_fix.y_m, wrap(X_fix.yaw_rad)};
   return error;
 }
 
@@ -94,13 +94,6 @@ void TaughtPathTracker::shift(const OdometryPose& delta) {
   if (!X_) return;
   moved_since_m_ += std::hypot(delta.x_m, delta.y_m);
   X_ = compose(*X_, delta);
-}
-
-double TaughtPathTracker::correct_yaw(double yaw_teach_rad, double gain) {
-  if (!X_) return 0.0;
-  const double correction = gain * wrap(yaw_teach_rad - X_->yaw_rad);
-  X_->yaw_rad = wrap(X_->yaw_rad + correction);
-  return correction;
 }
 
 bool TaughtPathTracker::piece_short(int i) const {

@@ -129,6 +129,38 @@ TEST(FixErrorMixture, VariancesStayPositiveAndFinite) {
   }
 }
 
+TEST(FixErrorMixture, ASourceOfOneAxisMovesOnlyThatAxis) {
+  // The lines' heading measures the heading alone (NaN elsewhere): a moved shelf's lines, 0.12
+  // rad turned, on a confident estimate make "moved" likely and leave the heading near the truth;
+  // the unmeasured axes' estimate and variances are untouched.
+  FixErrorMixture m;
+  const Axes3 var{0.0025, 0.0004, 0.006 * 0.006};
+  m.begin(options(), var);
+  const double nan = std::nan("");
+  double heading = 0.0;
+  for (int i = 0; i < 30; ++i) {
+    const Axes3 d = m.update({nan, nan, 0.12 - heading}, 1.0);
+    EXPECT_EQ(d[0], 0.0);
+    EXPECT_EQ(d[1], 0.0);
+    heading += d[2];
+  }
+  EXPECT_LT(m.usual_probability(), 0.01);
+  EXPECT_LT(std::abs(heading), 0.01);
+  EXPECT_NEAR(m.variance()[0], var[0], 1e-15);
+  EXPECT_NEAR(m.variance()[1], var[1], 1e-15);
+  // A heading the room's lines agree with (2 mrad off) keeps "room" and is taken.
+  m.begin(options(), var);
+  heading = 0.0;
+  for (int i = 0; i < 30; ++i) heading += m.update({nan, nan, 0.002 - heading}, 1.0)[2];
+  EXPECT_GT(m.usual_probability(), 0.5);
+  EXPECT_GT(heading, 0.0005);
+  // Nothing measured: nothing moves, and the odds stay the prior's.
+  m.begin(options(), var);
+  const Axes3 d = m.update({nan, nan, nan}, 1.0);
+  EXPECT_EQ(d[2], 0.0);
+  EXPECT_NEAR(m.usual_probability(), 0.9, 1e-12);
+}
+
 TEST(FixErrorMixture, BadInputIsRefused) {
   FixErrorMixture m;
   const Axes3 var{0.01, 0.01, 0.01};
@@ -145,6 +177,7 @@ TEST(FixErrorMixture, BadInputIsRefused) {
   m.begin(options(), var);
   EXPECT_THROW(m.update({0, 0, 0}, 0.0), std::invalid_argument);
   EXPECT_THROW(m.update({0, 0, 0}, 1.5), std::invalid_argument);
+  EXPECT_THROW(m.update({0, HUGE_VAL, 0}, 1.0), std::invalid_argument);
   EXPECT_THROW(m.rescale(3, 1.0, 1.0), std::invalid_argument);
   EXPECT_THROW(m.grow(0, -0.1), std::invalid_argument);
 }

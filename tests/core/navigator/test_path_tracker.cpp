@@ -112,33 +112,32 @@ TEST(TaughtPathTracker, ProgressNeverGoesBackNorBeyondTheEnd) {
   EXPECT_EQ(v.deviation()->piece, 2);
 }
 
-TEST(TaughtPathTracker, VisionFixPullsTheEstimateAndReportsTheCorrection) {
+TEST(TaughtPathTracker, VisionFixIsTakenAndTheCorrectionReported) {
   TaughtPathTracker t(l_path());
   t.set({0.5, 0.10, 0.05}, {}, 0);
-  const auto [dist_m, yaw_rad] = t.correct({0.5, 0.0, 0.0}, 0.5);
+  const auto [dist_m, yaw_rad] = t.correct({0.5, 0.0, 0.0});
   EXPECT_NEAR(dist_m, 0.10, 1e-12);
   EXPECT_NEAR(yaw_rad, 0.05, 1e-12);
-  EXPECT_NEAR(t.estimate()->y_m, 0.05, 1e-12);
-  EXPECT_NEAR(t.estimate()->yaw_rad, 0.025, 1e-12);
+  EXPECT_NEAR(t.estimate()->y_m, 0.0, 1e-12);
+  EXPECT_NEAR(t.estimate()->yaw_rad, 0.0, 1e-12);
   // Without an estimate, a fix sets it.
   TaughtPathTracker u(l_path());
-  u.correct({0.2, 0.0, 0.0}, 0.5);
+  EXPECT_EQ(u.correct({0.2, 0.0, 0.0}).first, 0.0);
   ASSERT_TRUE(u.estimate());
   EXPECT_DOUBLE_EQ(u.estimate()->x_m, 0.2);
 }
 
-TEST(TaughtPathTracker, HeadingFixTurnsOnlyTheHeadingAcrossTheWrap) {
+TEST(TaughtPathTracker, AShiftOfTheHeadingTurnsOnlyTheHeadingAcrossTheWrap) {
   TaughtPathTracker t(l_path());
   t.set({0.5, 0.10, 3.10}, {}, 0);
-  // The vision heading is -3.10 rad, 0.083 rad counter-clockwise of 3.10 across +-pi: half of it.
-  const double c = t.correct_yaw(-3.10, 0.5);
-  EXPECT_NEAR(c, 0.5 * (2.0 * M_PI - 6.20), 1e-12);
-  EXPECT_NEAR(std::remainder(t.estimate()->yaw_rad - (3.10 + c), 2.0 * M_PI), 0.0, 1e-12);
+  // 0.083 rad counter-clockwise of 3.10 is -3.10 across +-pi.
+  t.shift({0.0, 0.0, 2.0 * M_PI - 6.20});
+  EXPECT_NEAR(t.estimate()->yaw_rad, -3.10, 1e-12);
   EXPECT_DOUBLE_EQ(t.estimate()->x_m, 0.5);
   EXPECT_DOUBLE_EQ(t.estimate()->y_m, 0.10);
   // Without an estimate nothing happens.
   TaughtPathTracker u(l_path());
-  EXPECT_EQ(u.correct_yaw(1.0, 0.5), 0.0);
+  u.shift({0.0, 0.0, 1.0});
   EXPECT_FALSE(u.estimate());
 }
 

@@ -111,6 +111,9 @@ struct FloorFix {
   /// The lines' information alone (1/m^2): its eigenvector of the larger eigenvalue is the
   /// direction the lines fix (across a corridor's edges).
   Eigen::Matrix2d info_1_m2 = Eigen::Matrix2d::Zero();
+  /// The lines' information vector (sum of n z / sigma^2, 1/m): with info_1_m2, what the lines
+  /// alone say of the position (info_1_m2 t = info_vec_1_m), without the prior.
+  Eigen::Vector2d info_vec_1_m = Eigen::Vector2d::Zero();
   int inliers = 0;  ///< lines agreeing with the fix
   int usable = 0;   ///< lines on the floor, horizontal, below the horizon in both views
 };

@@ -45,9 +45,12 @@ class FixErrorMixture {
   /// A new segment model (or a placed estimate), from the estimate's variances now. Throws
   /// std::invalid_argument for sigmas <= 0, a prior outside (0, 1) or a variance <= 0.
   void begin(const FixErrorMixtureOptions& options, const Axes3& est_var);
-  /// One fix: the innovation (fix minus the estimate, robot axes) and the fix's weight in
-  /// (0, 1] (divides the noise variance). Each hypothesis updates its own estimate; returns the
-  /// move of the mixture's mean, by which the caller moves the estimate.
+  /// One fix: the innovation (fix minus the estimate, robot axes; NaN on an axis the source
+  /// does not measure, e.g. the lines' heading alone) and the fix's weight in (0, 1] (divides
+  /// the noise variance). Each hypothesis updates its own estimate; returns the move of the
+  /// mixture's mean (on an unmeasured axis only where the hypotheses' estimates differ and their
+  /// probabilities change), by which the caller moves the estimate. Throws
+  /// std::invalid_argument for an infinite innovation or a weight outside (0, 1].
   Axes3 update(const Axes3& innovation, double weight);
   /// The mixture's variance per axis (the estimate's, for the caller's sigmas).
   Axes3 variance() const;

@@ -298,8 +298,7 @@ class Navigator {
   /// nullopt without odometry or a segment scale.
   std::optional<control::PosePrior> resection_prior(int in) const;
   /// Without a VNHV fix this frame: the heading relative to IN from the lines matched with it
-  /// corrects the odometry estimate's heading (a Kalman update against heading_sigma_rad_;
-  /// telemetry line_yaw_*).
+  /// corrects the odometry estimate's heading (line_yaw_errors_; telemetry line_yaw_*).
   /// The verified line matches with key image `key_index` as normalised segment pairs (key,
   /// current).
   using LinePairs = std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>>;
@@ -362,6 +361,16 @@ class Navigator {
   /// heading), as the room's or a moved object's (fix_error_mixture.hpp): begun with each
   /// segment model.
   FixErrorMixture fix_errors_;
+  /// The same model for the heading from the lines matched with IN (the heading axis alone):
+  /// every line yaw of a segment comes from IN's lines and the structure they belong to, a moved
+  /// shelf's as well as the room's. Begun at the first line yaw with IN = line_yaw_in_.
+  FixErrorMixture line_yaw_errors_;
+  int line_yaw_in_ = -1;
+  /// The same model for the lateral position from the floor lines matched with IN (the across
+  /// axis alone): a moved bench's foot is a floor line too. Begun at the first floor fix with
+  /// IN = floor_in_.
+  FixErrorMixture floor_errors_;
+  int floor_in_ = -1;
   /// New segment model or a placed estimate: the shared fix errors start again.
   void begin_fix_errors();
   /// This frame, odometry places the robot on a piece of the taught path that teaching turned on

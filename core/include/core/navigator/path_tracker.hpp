@@ -79,16 +79,12 @@ class TaughtPathTracker {
   void set(const OdometryPose& X_teach_base, const OdometryPose& odom, int from_piece);
   /// Moves X by the odometry's motion since the previous reading; first reading: remembered.
   void predict(const OdometryPose& odom);
-  /// Pulls X towards a vision fix (teach frame) by `gain` in [0, 1] (1: take the fix). Returns
-  /// the distance (m) and |heading| (rad) between the prediction and the fix.
-  std::pair<double, double> correct(const OdometryPose& X_fix, double gain);
+  /// Takes a vision fix (teach frame) as X. Returns the distance (m) and |heading| (rad)
+  /// between the prediction and the fix. (Partial corrections, weighed per axis, are shift().)
+  std::pair<double, double> correct(const OdometryPose& X_fix);
   /// Moves X by `delta`, given in X's own frame (x along the robot, y across, yaw), e.g. a
   /// correction computed per axis. No estimate: nothing happens.
   void shift(const OdometryPose& delta);
-  /// Pulls X's heading only towards a vision heading (teach frame, rad) by `gain` in [0, 1]
-  /// (the relative yaw to a key image from lines: geometry/line_yaw.hpp). Returns the signed
-  /// correction (rad); 0 without an estimate.
-  double correct_yaw(double yaw_teach_rad, double gain);
   const std::optional<OdometryPose>& estimate() const { return X_; }
 
   /// The deviation at the current estimate, advancing the piece while the robot is past its

@@ -123,14 +123,19 @@ struct Telemetry {
   bool odometry_steered = false;
   /// No VNHV fix this frame, and the lines matched with IN gave the robot's yaw relative to IN
   /// (geometry/line_yaw.hpp): that yaw (rad, CCW) and the heading correction it made to the
-  /// odometry estimate (rad); NaN otherwise.
-  double line_yaw_rad = kNaN, line_yaw_correction_rad = kNaN;
+  /// odometry estimate (rad), and the probability that the segment's line yaws so far are the
+  /// room's rather than a moved object's (navigator/fix_error_mixture.hpp); NaN otherwise.
+  double line_yaw_rad = kNaN, line_yaw_correction_rad = kNaN, line_yaw_room_probability = kNaN;
   /// No VNHV fix this frame, and the lines on the floor matched with IN fixed the robot's
   /// position across them (geometry/floor_lines.hpp): the lines that agreed, and the odometry
-  /// estimate's lateral offset in IN's taught frame before and after the update (m, > 0 left);
-  /// 0 and NaN otherwise.
+  /// estimate's lateral offset in IN's taught frame before and after the update (m, > 0 left),
+  /// what the lines alone say it is and that measurement's sigma (m), and the probability that
+  /// the segment's floor lines so far are the room's rather than a moved object's
+  /// (navigator/fix_error_mixture.hpp); 0 and NaN otherwise.
   int floor_lines = 0;
   double floor_lateral_before_m = kNaN, floor_lateral_after_m = kNaN;
+  double floor_lateral_lines_m = kNaN, floor_lateral_lines_sigma_m = kNaN;
+  double floor_room_probability = kNaN;
   /// On the first frame after a blind stretch with a VNHV fix: how far that fix moved the
   /// odometry estimate, the drift corrected at re-acquisition, m and rad (else NaN).
   double drift_corrected_m = kNaN, drift_corrected_rad = kNaN;
