@@ -161,8 +161,8 @@ int run_demo(const DemoArgs& args) {
     core::memory::VisualMemory map = core::memory::load_map(map_dir);
     StepFunction step;  // ceiling mode: the ceiling navigator steps the same replay loop
     if (mode == core::NavMode::kCeiling) {
-      step = make_ceiling_replay(*replay_robot.mock, map_dir, map, ro.head.head_pitch_rad,
-                                 config.ceiling_navigator_options())
+      step = make_ceiling_replay(replay_robot.mock.get(), config.robot.ceiling_height_m, map_dir,
+                                 map, ro.head.head_pitch_rad, config.ceiling_navigator_options())
                  .step;
     }
     const ReplayResult replayed =

@@ -52,7 +52,7 @@ int run_replay(const ReplayArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
     const core::NavMode mode = parse_mode(a.common.mode);
-    refuse_ceiling_on_real_robot(mode, a.common.robot, "replay");  // before the map and robot
+    refuse_ceiling_on_real_robot(mode, a.common.robot, config, "replay");  // before map and robot
     core::memory::LoadOptions load;
     load.expected_mode = mode;  // a map of the other mode is refused, naming both
     core::memory::VisualMemory map = core::memory::load_map(a.map, load);
@@ -132,8 +132,8 @@ int run_replay(const ReplayArgs& a) {
     // Ceiling mode: the ceiling navigator steps the same replay loop (ceiling_replay.hpp).
     StepFunction step;
     if (mode == core::NavMode::kCeiling) {
-      step = make_ceiling_replay(*robot.mock, a.map, map, o.head.head_pitch_rad,
-                                 config.ceiling_navigator_options())
+      step = make_ceiling_replay(robot.mock.get(), config.robot.ceiling_height_m, a.map, map,
+                                 o.head.head_pitch_rad, config.ceiling_navigator_options())
                  .step;
     }
     const ReplayResult r = run_replay_session(robot, std::move(map), o, link, step);

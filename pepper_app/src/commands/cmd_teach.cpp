@@ -89,9 +89,9 @@ int run_teach(const TeachArgs& a) {
   try {
     const AppConfig config = load_session_config(a.common);
     const core::NavMode mode = parse_mode(a.common.mode);
-    RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
     // Refused (exit 2) before the old map is moved aside or anything connects.
-    refuse_ceiling_on_real_robot(mode, a.common.robot, "teach");
+    refuse_ceiling_on_real_robot(mode, a.common.robot, config, "teach");
+    RobotConnection robot = open_robot(a.common.robot, robot_connect_options(a.common, config));
     if (a.scripted && a.manual) return report_error(
           "--scripted and --manual exclude each other: drop one (--scripted drives the mock "
           "world's path, --manual drives from the UI)");
@@ -102,6 +102,7 @@ int run_teach(const TeachArgs& a) {
     o.camera = camera_request(config);
     o.camera_model = load_camera_option(a.camera);
     o.head = head_request(config, mode);
+    o.ceiling_height_m = config.robot.ceiling_height_m;
     o.teach = config.teach_options();
     o.mode = mode;
     o.feedback = teach_feedback_limits(config, o.min_key_features);

@@ -55,6 +55,11 @@ struct RobotConfig {
   /// Head pitch of the lock in ceiling mode (--mode ceiling, issue 24): looking up, near
   /// HeadPitch's limit (-0.7068 rad), so the camera sees the ceiling from ~0.8 m ahead.
   double ceiling_head_pitch_rad = -0.7;
+  /// The ceiling's height above the floor where the robot drives (m), measured by the operator:
+  /// ceiling mode on a real robot needs it (the canonical view's scale; a wrong height scales
+  /// every distance). 0 = not set: ceiling mode then runs on mock: robots only, which take their
+  /// world's ceiling.
+  double ceiling_height_m = 0.0;
   double watchdog_s = 0.3;       ///< bridge stops the base without a fresh command this long
   double frame_timeout_s = 1.0;  ///< session stops the base when no frame comes this long
   /// Robot-side deadman: each velocity command ends by itself on the robot after this long

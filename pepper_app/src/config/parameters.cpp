@@ -685,6 +685,10 @@ std::vector<Parameter> build_table() {
     row("robot.ceiling_head_pitch_rad",
         robot, &RobotConfig::ceiling_head_pitch_rad, "rad", "[-0.707, 0)",
         "head pitch while locked in ceiling mode (--mode ceiling; < 0 looks up)"),
+    row("robot.ceiling_height_m",
+        robot, &RobotConfig::ceiling_height_m, "m", "[0, 30]",
+        "ceiling's height above the floor, measured (ceiling mode on a real robot needs it; 0: not "
+        "set, mock: robots use their world's)"),
     row("robot.head_yaw_rad",
         robot, &RobotConfig::head_yaw_rad, "rad", "[-2.086, 2.086]",
         "head yaw while locked (Pepper's HeadYaw range)"),

@@ -437,8 +437,8 @@ RunResult replay_run(const TeachResult& teach,
   // The replay loop users run (`replay`, `demo`): its decisions are what is scored here.
   StepFunction step;  // ceiling mode: the ceiling navigator steps the same loop
   if (options.mode == core::NavMode::kCeiling) {
-    step = make_ceiling_replay(*robot.mock, teach.map_dir, teach.map, options.head.head_pitch_rad,
-                               options.ceiling)
+    step = make_ceiling_replay(robot.mock.get(), 0.0, teach.map_dir, teach.map,
+                               options.head.head_pitch_rad, options.ceiling)
                .step;
   }
   const ReplayResult replayed = run_replay_session(robot, teach.map, so, link, step);

@@ -5,6 +5,7 @@
 
 #include "core/ceiling/landmarks.hpp"
 #include "core/ceiling/observation.hpp"
+#include "core/geometry/floor_lines.hpp"
 
 namespace pepper::app {
 
@@ -25,6 +26,31 @@ CeilingCameraSetup ceiling_camera_of_mock(const sim::MockRobot& robot,
   }
   s.cam_in_base_m = {T_base_cam.translation().x(), T_base_cam.translation().y()};
   return s;
+}
+
+CeilingCameraSetup ceiling_camera_of_pepper(double ceiling_height_m,
+                                            const core::CameraIntrinsics& camera,
+                                            double head_pitch_rad) {
+  const core::geometry::CameraOnBase mount = core::geometry::pepper_top_camera(head_pitch_rad);
+  CeilingCameraSetup s;
+  s.camera.intrinsics = camera;
+  s.camera.head_pitch_rad = head_pitch_rad;
+  s.camera.ceiling_above_cam_m = ceiling_height_m - mount.height_m;
+  if (!(s.camera.ceiling_above_cam_m > 0.0)) {
+    throw std::invalid_argument(
+        "ceiling mode: robot.ceiling_height_m = " + std::to_string(ceiling_height_m) +
+        " m is not above Pepper's camera (" + std::to_string(mount.height_m) +
+        " m): measure the ceiling's height above the floor and set it, e.g. --set "
+        "robot.ceiling_height_m=2.7");
+  }
+  s.cam_in_base_m = {mount.forward_m, 0.0};
+  return s;
+}
+
+CeilingCameraSetup ceiling_camera_for(const sim::MockRobot* mock, double ceiling_height_m,
+                                      const core::CameraIntrinsics& camera, double head_pitch_rad) {
+  return mock ? ceiling_camera_of_mock(*mock, camera, head_pitch_rad)
+              : ceiling_camera_of_pepper(ceiling_height_m, camera, head_pitch_rad);
 }
 
 namespace {

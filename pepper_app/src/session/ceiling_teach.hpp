@@ -48,6 +48,18 @@ CeilingCameraSetup ceiling_camera_of_mock(const sim::MockRobot& robot,
                                           const core::CameraIntrinsics& camera,
                                           double head_pitch_rad);
 
+/// A real Pepper's: the top camera's mount at `head_pitch_rad` (geometry::pepper_top_camera)
+/// and the ceiling `ceiling_height_m` above the floor (robot.ceiling_height_m). Throws
+/// std::invalid_argument when the ceiling is not above the camera (or not set: 0).
+CeilingCameraSetup ceiling_camera_of_pepper(double ceiling_height_m,
+                                            const core::CameraIntrinsics& camera,
+                                            double head_pitch_rad);
+
+/// The one a session uses: the simulated robot's when there is one (`mock`, its world's
+/// ceiling), else a real Pepper's with the configured height.
+CeilingCameraSetup ceiling_camera_for(const sim::MockRobot* mock, double ceiling_height_m,
+                                      const core::CameraIntrinsics& camera, double head_pitch_rad);
+
 struct CeilingTeachOptions {
   /// Canonical scale: 120 px/m drifted least on the test hall at QVGA (docs/method/ceiling.md).
   double px_per_m = 120.0;

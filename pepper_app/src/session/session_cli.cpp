@@ -50,14 +50,16 @@ core::NavMode parse_mode(const std::string& text) {
 }
 
 void refuse_ceiling_on_real_robot(core::NavMode mode, const std::string& robot_url,
-                                  const std::string& command) {
+                                  const AppConfig& config, const std::string& command) {
   if (mode != core::NavMode::kCeiling) return;
   if (parse_robot_url(robot_url).kind == RobotUrl::Kind::kMock) return;
+  if (config.robot.ceiling_height_m > 0.0) return;
   throw ModeUnavailableError(
       command +
-      " --mode ceiling runs on mock: robots only for now: the ceiling's height above the camera "
-      "comes from the simulated world and is not configured or estimated on a real robot yet "
-      "(docs/method/ceiling.md)");
+      " --mode ceiling on a real robot needs the ceiling's height above the floor, which sets the "
+      "scale of everything the camera sees of it: measure it and set robot.ceiling_height_m "
+      "(e.g. --set robot.ceiling_height_m=2.7, or in the config file; docs/method/ceiling.md). "
+      "mock: robots take their world's ceiling");
 }
 
 EventSink::EventSink(const std::string& spec) {

@@ -94,11 +94,12 @@ void add_mode_option(CLI::App* cmd, std::string& mode);
 core::NavMode parse_mode(const std::string& text);
 
 
-/// Ceiling mode needs the ceiling's height above the camera, known only in the simulator so far:
-/// throws ModeUnavailableError (exit 2, before anything connects) for ceiling mode on a robot URL
-/// that is not `mock:`; returns otherwise. Throws RobotUrlError for a URL that names no robot.
+/// Ceiling mode needs the ceiling's height above the floor: a mock: robot's world has it, a real
+/// robot needs robot.ceiling_height_m. Throws ModeUnavailableError (exit 2, before anything
+/// connects) for ceiling mode on a robot URL that is not `mock:` without that height; returns
+/// otherwise. Throws RobotUrlError for a URL that names no robot.
 void refuse_ceiling_on_real_robot(core::NavMode mode, const std::string& robot_url,
-                                  const std::string& command);
+                                  const AppConfig& config, const std::string& command);
 
 /// The map decides the camera size (issue 30): throws ConfigError, naming the setting to drop,
 /// when a --set in `sets` or the `config_file` explicitly asks for a size other than the map's;

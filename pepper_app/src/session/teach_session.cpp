@@ -111,11 +111,11 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     throw std::invalid_argument("teach: --scripted needs a mock: robot (it drives on ground truth)");
   }
   const bool ceiling_mode = options.mode == core::NavMode::kCeiling;
-  if (ceiling_mode && !robot.mock) {
+  if (ceiling_mode && !robot.mock && !(options.ceiling_height_m > 0.0)) {
     throw std::invalid_argument(
-        "teach --mode ceiling runs on mock: robots only for now: the ceiling's height above the "
-        "camera is taken from the simulated world, and is not configured or estimated on a real "
-        "robot yet (docs/method/ceiling.md)");
+        "teach --mode ceiling on a real robot needs the ceiling's height above the floor: measure "
+        "it and set robot.ceiling_height_m (e.g. --set robot.ceiling_height_m=2.7; "
+        "docs/method/ceiling.md)");
   }
   nb::RobotBridge& bridge = *robot.bridge;
   TeachResult result;
@@ -193,7 +193,9 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     }
     if (ceiling_mode) {
       ceiling_teacher.emplace(
-          ceiling_camera_of_mock(*robot.mock, camera, options.head.head_pitch_rad), camera,
+          ceiling_camera_for(robot.mock.get(), options.ceiling_height_m, camera,
+                             options.head.head_pitch_rad),
+          camera,
           options.teach.extractor, options.ceiling);
     } else {
       teacher.emplace(camera, options.teach);

@@ -15,8 +15,8 @@
 // `head`), and where the forward teacher runs, a CeilingTeacher (ceiling_teach.hpp) builds the
 // mosaic from the canonical ceiling view of every taught frame; at the end the relay images are
 // chosen and the map (mode ceiling, key images = relay images), the mosaic and the ceiling tour
-// are saved (ceiling_map.hpp). Mock robots only for now (the ceiling height comes from the
-// simulated world). The forward-view live warnings and overlay are not shown in ceiling mode.
+// are saved (ceiling_map.hpp). The ceiling's height is the simulated world's on a mock robot and
+// ceiling_height_m on a real one. The forward-view live warnings and overlay are not shown in ceiling mode.
 //
 // Safety: every way out (finish, Ctrl-C flag, exception, lost connection, stalled frames) sends
 // bridge.stop() FIRST; then the recording is kept (it can become a map with `map build`); then
@@ -56,6 +56,9 @@ struct TeachSessionOptions {
   core::mapping::TeachOptions teach;
   core::NavMode mode = core::NavMode::kForward;  ///< kCeiling: mock: robots only (see above)
   CeilingTeachOptions ceiling;                   ///< ceiling mode's mosaic and relay images
+  /// Ceiling mode on a real robot: the ceiling's height above the floor (m; robot.
+  /// ceiling_height_m). Mock robots take their world's.
+  double ceiling_height_m = 0.0;
   std::string config_json = "{}";       ///< effective configuration, stored in map + recording
   bool scripted = false;                ///< drive with the mock world's TeachDriver (mock: only)
   double max_distance_m = 0.0;          ///< > 0: end the tour after this much driving

@@ -336,6 +336,58 @@ TEST(AppE2E, TeachAndReplayThroughMockNaoqiServer) {
   server.stop();
 }
 
+// Ceiling mode on a robot that is not mock: (issue 24), over real sockets: refused before
+// connecting without the ceiling's height; with robot.ceiling_height_m it teaches a ceiling map
+// (mosaic, relay images) and replays it to the end through the mock NAOqi server.
+TEST(AppE2E, CeilingModeThroughMockNaoqiServerTakesTheConfiguredHeight) {
+  const fs::path dir = fresh_dir("qi_ceiling");
+  auto world = std::make_shared<const sim::World>(sim::load_world(kWorldFile));
+  sim::MockRobot robot(world);
+  naoqi_bridge::qi::MockNaoqiServer server(robot);
+  server.start();
+  const std::vector<std::string> ceiling = {"--mode", "ceiling"};
+  test::AppProcess refused(
+      test::cat(test::cat({"teach", "--robot", server.url(), "--map", (dir / "refused").string()},
+                          ceiling),
+                kQvga),
+      dir, "refused");
+  EXPECT_EQ(refused.wait(), 2) << refused.both();
+  EXPECT_NE(refused.both().find("robot.ceiling_height_m"), std::string::npos) << refused.both();
+  EXPECT_EQ(server.stats().frames_served, 0u);
+  EXPECT_FALSE(fs::exists(dir / "refused"));
+  const std::vector<std::string> height = {
+      "--set", "robot.ceiling_height_m=" + std::to_string(world->ceiling_height_m)};
+  test::AppProcess teach(
+      test::cat(test::cat(test::cat({"teach", "--robot", server.url(), "--map",
+                                     (dir / "map").string(), "--max-frames", "25"},
+                                    ceiling),
+                          kQvga),
+                height),
+      dir, "teach");
+  ASSERT_EQ(teach.wait(), 0) << teach.both();
+  const auto map = core::memory::load_map(dir / "map");
+  EXPECT_EQ(map.mode, core::NavMode::kCeiling);
+  EXPECT_GE(map.key_images.size(), 2u);
+  EXPECT_TRUE(fs::exists(dir / "map" / "mosaic.json"));
+  test::AppProcess replay(
+      test::cat(test::cat(test::cat({"replay", "--robot", server.url(), "--map",
+                                     (dir / "map").string(), "--max-frames", "60", "--events",
+                                     (dir / "events.jsonl").string()},
+                                    ceiling),
+                          kQvga),
+                height),
+      dir, "replay");
+  EXPECT_EQ(replay.wait(), 0) << replay.both();
+  const auto r = last_event(dir / "events.jsonl", "replay_done");
+  ASSERT_TRUE(r.is_object()) << replay.both();
+  EXPECT_EQ(r["outcome"], "tour_complete") << replay.both();
+  const auto log = robot.command_log();
+  ASSERT_FALSE(log.empty());
+  EXPECT_TRUE(log.back().stop_move || (log.back().velocity.v_x_m_s == 0.0 &&
+                                       log.back().velocity.omega_rad_s == 0.0));
+  server.stop();
+}
+
 TEST(AppE2E, ConfigDumpRoundTrips) {
   const fs::path dir = fresh_dir("config");
   test::AppProcess dump({"config", "dump", "--set", "robot.camera_fps=10"}, dir, "dump");
