@@ -38,6 +38,9 @@
 //                              (features.matcher.essential.planar, camera pitch 0.18 rad).
 //   BM_RealNavigatorStep{Qvga,Vga}Fast    the same with the options of the app's `fast` preset
 //                              (planar model at pitch 0, KLT window 9 px; issue 22).
+//   BM_RealNavigatorStep{Qvga,Vga}Cap300  the defaults with the five-point RANSAC capped at
+//                              300 samples (features.matcher.essential.max_iterations; 1000
+//                              by default).
 //   BM_RealNavigatorStep{Qvga,Vga}TwoThreads  the defaults with OpenCV on 2 threads
 //                              (cv::setNumThreads(2) for the benchmark; IN and INN matched as two
 //                              concurrent tasks, FrameMatcher::compute_two_views): run it on two
@@ -400,6 +403,24 @@ void BM_RealNavigatorStepVgaFast(benchmark::State& state) {
   step_sequence(state, vga_sequence(), fast_options());
 }
 BENCHMARK(BM_RealNavigatorStepVgaFast)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+
+// The defaults with the five-point RANSAC capped at 300 samples instead of 1000
+// (features.matcher.essential.max_iterations; issue 22, docs/perception.md "Speed, session 25
+// (issue 22)"): calls where little is shared run to the cap, and each five-point sample costs
+// ~0.2 M instructions, nearly all in OpenCV's minimal solver.
+core::navigator::NavigatorOptions cap300_options() {
+  core::navigator::NavigatorOptions o;
+  o.matcher.essential.max_iterations = 300;
+  return o;
+}
+void BM_RealNavigatorStepQvgaCap300(benchmark::State& state) {
+  step_sequence(state, qvga_sequence(), cap300_options());
+}
+BENCHMARK(BM_RealNavigatorStepQvgaCap300)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+void BM_RealNavigatorStepVgaCap300(benchmark::State& state) {
+  step_sequence(state, vga_sequence(), cap300_options());
+}
+BENCHMARK(BM_RealNavigatorStepVgaCap300)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
 
 }  // namespace
 
