@@ -66,6 +66,10 @@ std::vector<std::string> CeilingTour::validate() const {
   if (odometry_disagreement_m && !(*odometry_disagreement_m >= 0.0))
     e.push_back("odometry_disagreement_m must be >= 0");
   if (!(driven_m >= 0.0)) e.push_back("driven_m must be >= 0");
+  if (ceiling && !(ceiling->above_camera_m > 0.0 && std::isfinite(ceiling->height_m) &&
+                   ceiling->height_m > ceiling->above_camera_m)) {
+    e.push_back("ceiling: above_camera_m must be > 0 and below height_m");
+  }
   return e;
 }
 
@@ -88,7 +92,10 @@ void save_ceiling_tour(const CeilingTour& tour, const fs::path& file) {
             {"breaks", tour.breaks},
             {"odometry_disagreement_m",
              tour.odometry_disagreement_m ? json(*tour.odometry_disagreement_m) : json(nullptr)},
-            {"driven_m", tour.driven_m}};
+            {"driven_m", tour.driven_m},
+            {"ceiling", tour.ceiling ? json{{"height_m", tour.ceiling->height_m},
+                                            {"above_camera_m", tour.ceiling->above_camera_m}}
+                                     : json(nullptr)}};
   j["crc32"] = body_crc(j);
   const std::string text = j.dump(1) + "\n";
 
@@ -111,9 +118,9 @@ CeilingTour load_ceiling_tour(const fs::path& file) {
       throw CeilingTourError(
           file, std::string("not a ceiling tour file (format != ") + kFormatName + ")");
     const int version = j.at("format_version").get<int>();
-    if (version != kCeilingTourFormatVersion)
+    if (version != kCeilingTourFormatVersion && version != 1)
       throw CeilingTourError(file, "ceiling tour format version " + std::to_string(version) +
-                                       ", this build reads version " +
+                                       ", this build reads versions 1 to " +
                                        std::to_string(kCeilingTourFormatVersion));
     if (j.at("crc32").get<uint32_t>() != body_crc(j))
       throw CeilingTourError(file, "CRC-32 mismatch (edited or corrupt)");
@@ -131,6 +138,13 @@ CeilingTour load_ceiling_tour(const fs::path& file) {
     const json& d = j.at("odometry_disagreement_m");
     if (!d.is_null()) t.odometry_disagreement_m = d.get<double>();
     t.driven_m = j.at("driven_m").get<double>();
+    if (version >= 2) {  // version 1 did not record the ceiling
+      const json& c = j.at("ceiling");
+      if (!c.is_null()) {
+        t.ceiling = TaughtCeiling{c.at("height_m").get<double>(),
+                                  c.at("above_camera_m").get<double>()};
+      }
+    }
   } catch (const json::exception& e) {
     throw CeilingTourError(file, std::string("missing or mistyped field: ") + e.what());
   }

@@ -132,9 +132,11 @@ int run_replay(const ReplayArgs& a) {
     // Ceiling mode: the ceiling navigator steps the same replay loop (ceiling_replay.hpp).
     StepFunction step;
     if (mode == core::NavMode::kCeiling) {
-      step = make_ceiling_replay(robot.mock.get(), config.robot.ceiling_height_m, a.map, map,
-                                 o.head.head_pitch_rad, config.ceiling_navigator_options())
-                 .step;
+      CeilingReplay ceiling =
+          make_ceiling_replay(robot.mock.get(), config.robot.ceiling_height_m, a.map, map,
+                              o.head.head_pitch_rad, config.ceiling_navigator_options());
+      for (const auto& w : ceiling.warnings) console.line("pepper_app replay: warning: " + w);
+      step = std::move(ceiling.step);
     }
     const ReplayResult r = run_replay_session(robot, std::move(map), o, link, step);
     if (!a.mock_command_log.empty() && robot.mock) {

@@ -84,6 +84,13 @@ std::string ceiling_summary_text(const CeilingParts& parts) {
        << r.T_mosaic_base.y_m << ") m, " << r.T_mosaic_base.theta_rad << " rad, "
        << r.landmark_ids.size() << " landmarks\n";
   }
+  if (t.ceiling) {
+    os << std::setprecision(2) << "taught under a ceiling " << t.ceiling->height_m
+       << " m above the floor, " << t.ceiling->above_camera_m << " m above the camera\n"
+       << std::setprecision(3);
+  } else {
+    os << "ceiling height not recorded (format version 1)\n";
+  }
   os << "driven " << t.driven_m << " m; chained pose vs odometry at the end: ";
   if (t.odometry_disagreement_m) {
     os << *t.odometry_disagreement_m << " m\n";

@@ -1,11 +1,33 @@
 #include "session/ceiling_replay.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "session/ceiling_map.hpp"
 #include "session/ceiling_teach.hpp"
 
 namespace pepper::app {
+
+void check_taught_ceiling(const core::ceiling::CeilingTour& tour, const CeilingCameraSetup& setup,
+                          const std::filesystem::path& tour_file) {
+  if (!tour.ceiling) return;
+  const double taught_m = tour.ceiling->above_camera_m;
+  const double now_m = setup.camera.ceiling_above_cam_m;
+  const double scale = now_m / taught_m;
+  if (std::abs(scale - 1.0) <= kCeilingScaleTolerance) return;
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "%s: taught under a ceiling %.2f m above the floor (%.2f m above the camera), "
+                "this replay's is %.2f m (%.2f m above the camera): every distance of the tour "
+                "would be %.0f %% off; replay with the teach's ceiling (--set "
+                "robot.ceiling_height_m=%.2f; mock: robots take their world's) or teach again "
+                "under this one",
+                tour_file.string().c_str(), tour.ceiling->height_m, taught_m,
+                setup.ceiling_height_m, now_m, std::abs(scale - 1.0) * 100.0,
+                tour.ceiling->height_m);
+  throw std::invalid_argument(text);
+}
 
 CeilingReplay make_ceiling_replay(const sim::MockRobot* robot, double ceiling_height_m,
                                   const std::filesystem::path& map_dir,
@@ -18,7 +40,14 @@ CeilingReplay make_ceiling_replay(const sim::MockRobot* robot, double ceiling_he
   // The map's camera: the session checks that the started camera agrees with it.
   const CeilingCameraSetup setup =
       ceiling_camera_for(robot, ceiling_height_m, map.camera, head_pitch_rad);
+  check_taught_ceiling(parts.tour, setup, map_dir / kCeilingTourFileName);
   CeilingReplay r;
+  if (!parts.tour.ceiling) {
+    r.warnings.push_back((map_dir / kCeilingTourFileName).string() +
+                         ": taught before tours recorded their ceiling (format version 1): this "
+                         "replay cannot check that its ceiling height is the teach's; teach "
+                         "again to record it");
+  }
   r.navigator = std::make_shared<core::ceiling::CeilingNavigator>(
       std::move(parts.mosaic), std::move(parts.tour), setup.camera, setup.cam_in_base_m, options);
   r.step = [nav = r.navigator](const core::Frame& frame) { return nav->step(frame).step; };

@@ -7,15 +7,25 @@
 // The camera geometry is the simulated robot's where there is one (its world's ceiling), else a
 // real Pepper's with the configured ceiling height (ceiling_camera_for, as in ceiling teach);
 // without a height the callers refuse real robots before anything connects.
+// The tour's metres are the teach's: its ceiling's distance above the camera set their scale.
+// A replay under a ceiling whose distance differs by more than kCeilingScaleTolerance would run
+// every distance of the tour that much too long or too short, so it is refused
+// (check_taught_ceiling); a tour of format version 1 did not record its ceiling and replays with
+// a warning.
 // Errors: a map that is not in ceiling mode, a damaged or missing mosaic or tour (MosaicError,
-// CeilingTourError, std::runtime_error naming the file), or a world without a ceiling above the
-// camera throw before anything moves. Not thread-safe (one replay).
+// CeilingTourError, std::runtime_error naming the file), a world without a ceiling above the
+// camera, or another ceiling than the teach's throw before anything moves. Not thread-safe (one
+// replay).
 
 #include <filesystem>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "core/ceiling/ceiling_navigator.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "core/ceiling/ceiling_tour.hpp"
+#include "session/ceiling_teach.hpp"
 #include "session/replay_session.hpp"
 #include "sim/mock_robot.hpp"
 
@@ -28,10 +38,21 @@ namespace pepper::app {
 struct CeilingReplay {
   std::shared_ptr<core::ceiling::CeilingNavigator> navigator;
   StepFunction step;
+  std::vector<std::string> warnings;  ///< for the operator (a tour that cannot be checked)
 };
 CeilingReplay make_ceiling_replay(const sim::MockRobot* robot, double ceiling_height_m,
                                   const std::filesystem::path& map_dir,
                                   const core::memory::VisualMemory& map, double head_pitch_rad,
                                   const core::ceiling::CeilingNavigatorOptions& options = {});
+
+/// Largest relative difference between the teach's and the replay's ceiling distance above the
+/// camera: the head pitches a replay may use move Pepper's camera by about 4 mm (0.3 % of a
+/// 1.5 m distance); a ceiling measured again to within a few centimetres passes.
+inline constexpr double kCeilingScaleTolerance = 0.03;
+
+/// Throws std::invalid_argument naming `tour_file` when `setup`'s ceiling is not the one
+/// `tour` was taught under (kCeilingScaleTolerance); a tour without one (format 1) passes.
+void check_taught_ceiling(const core::ceiling::CeilingTour& tour, const CeilingCameraSetup& setup,
+                          const std::filesystem::path& tour_file);
 
 }  // namespace pepper::app

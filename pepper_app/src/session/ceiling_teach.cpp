@@ -11,40 +11,46 @@ namespace pepper::app {
 
 namespace cc = core::ceiling;
 
-CeilingCameraSetup ceiling_camera_of_mock(const sim::MockRobot& robot,
-                                          const core::CameraIntrinsics& camera,
-                                          double head_pitch_rad) {
-  const Eigen::Isometry3d T_base_cam = robot.options().mount.T_base_cam(0.0, head_pitch_rad);
+namespace {
+
+// The setup of a camera `cam_height_m` above the floor and `cam_in_base_m` from the rotation
+// axis under a ceiling `ceiling_height_m` above the floor; `not_above` is the refusal's text.
+CeilingCameraSetup ceiling_camera_setup(double ceiling_height_m, double cam_height_m,
+                                        cv::Point2d cam_in_base_m,
+                                        const core::CameraIntrinsics& camera,
+                                        double head_pitch_rad, const std::string& not_above) {
   CeilingCameraSetup s;
   s.camera.intrinsics = camera;
   s.camera.head_pitch_rad = head_pitch_rad;
-  s.camera.ceiling_above_cam_m = robot.world().ceiling_height_m - T_base_cam.translation().z();
-  if (!(s.camera.ceiling_above_cam_m > 0.0)) {
-    throw std::invalid_argument("ceiling mode: the world's ceiling (" +
-                                std::to_string(robot.world().ceiling_height_m) +
-                                " m) is not above the camera");
-  }
-  s.cam_in_base_m = {T_base_cam.translation().x(), T_base_cam.translation().y()};
+  s.camera.ceiling_above_cam_m = ceiling_height_m - cam_height_m;
+  if (!(s.camera.ceiling_above_cam_m > 0.0)) throw std::invalid_argument(not_above);
+  s.ceiling_height_m = ceiling_height_m;
+  s.cam_in_base_m = cam_in_base_m;
   return s;
+}
+
+}  // namespace
+
+CeilingCameraSetup ceiling_camera_of_mock(const sim::MockRobot& robot,
+                                          const core::CameraIntrinsics& camera,
+                                          double head_pitch_rad) {
+  const Eigen::Vector3d t = robot.options().mount.T_base_cam(0.0, head_pitch_rad).translation();
+  const double ceiling_m = robot.world().ceiling_height_m;
+  return ceiling_camera_setup(ceiling_m, t.z(), {t.x(), t.y()}, camera, head_pitch_rad,
+                              "ceiling mode: the world's ceiling (" + std::to_string(ceiling_m) +
+                                  " m) is not above the camera");
 }
 
 CeilingCameraSetup ceiling_camera_of_pepper(double ceiling_height_m,
                                             const core::CameraIntrinsics& camera,
                                             double head_pitch_rad) {
   const core::geometry::CameraOnBase mount = core::geometry::pepper_top_camera(head_pitch_rad);
-  CeilingCameraSetup s;
-  s.camera.intrinsics = camera;
-  s.camera.head_pitch_rad = head_pitch_rad;
-  s.camera.ceiling_above_cam_m = ceiling_height_m - mount.height_m;
-  if (!(s.camera.ceiling_above_cam_m > 0.0)) {
-    throw std::invalid_argument(
-        "ceiling mode: robot.ceiling_height_m = " + std::to_string(ceiling_height_m) +
-        " m is not above Pepper's camera (" + std::to_string(mount.height_m) +
-        " m): measure the ceiling's height above the floor and set it, e.g. --set "
-        "robot.ceiling_height_m=2.7");
-  }
-  s.cam_in_base_m = {mount.forward_m, 0.0};
-  return s;
+  return ceiling_camera_setup(
+      ceiling_height_m, mount.height_m, {mount.forward_m, 0.0}, camera, head_pitch_rad,
+      "ceiling mode: robot.ceiling_height_m = " + std::to_string(ceiling_height_m) +
+          " m is not above Pepper's camera (" + std::to_string(mount.height_m) +
+          " m): measure the ceiling's height above the floor and set it, e.g. --set "
+          "robot.ceiling_height_m=2.7");
 }
 
 CeilingCameraSetup ceiling_camera_for(const sim::MockRobot* mock, double ceiling_height_m,
@@ -125,6 +131,7 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
     out.tour.relay_images.push_back(std::move(rec));
   }
   out.tour.frames = static_cast<int64_t>(frames_.size());
+  out.tour.ceiling = cc::TaughtCeiling{setup_.ceiling_height_m, setup_.camera.ceiling_above_cam_m};
   out.tour.unlocalised_frames = unlocalised_;
   for (const size_t b : relays.breaks) out.tour.breaks.push_back(static_cast<int64_t>(b));
   const double first_m = frames_.front().travelled_m, last_m = frames_.back().travelled_m;

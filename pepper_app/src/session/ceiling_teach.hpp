@@ -9,8 +9,9 @@
 // and the CeilingTour (relay poses and landmarks, breaks, drift indicators).
 //
 // The camera geometry (ceiling height above the optical centre, the optical centre on the base)
-// comes from the simulated robot (ceiling_camera_of_mock): on a real robot the ceiling height is
-// not configured or estimated yet, so ceiling teach runs on mock: robots only.
+// comes from the simulated robot (ceiling_camera_of_mock) or, on a real Pepper, from its head
+// geometry and the configured robot.ceiling_height_m (ceiling_camera_of_pepper). The tour records
+// that ceiling (CeilingTour::ceiling) so that a replay under another one is refused.
 // Frames and units: core/ceiling (base frame x forward, y left, metres; mosaic frame = base frame
 // of the first frame). Errors: bad options throw std::invalid_argument; finish() throws
 // std::runtime_error when the tour gives no usable mosaic (fewer than 2 frames or no landmark).
@@ -40,6 +41,8 @@ namespace pepper::app {
 struct CeilingCameraSetup {
   core::ceiling::CeilingCamera camera;
   cv::Point2d cam_in_base_m;  ///< optical centre's horizontal offset from the rotation axis
+  double ceiling_height_m = 0.0;  ///< the ceiling above the floor (camera.ceiling_above_cam_m
+                                  ///< is above the optical centre)
 };
 
 /// The simulated robot's: its world's ceiling height and its camera mount at `head_pitch_rad`.

@@ -22,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/ceiling/ceiling_tour.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "naoqi_bridge/qi/mock_server.hpp"
 #include "app/e2e/app_process.hpp"
@@ -369,6 +370,26 @@ TEST(AppE2E, CeilingModeThroughMockNaoqiServerTakesTheConfiguredHeight) {
   EXPECT_EQ(map.mode, core::NavMode::kCeiling);
   EXPECT_GE(map.key_images.size(), 2u);
   EXPECT_TRUE(fs::exists(dir / "map" / "mosaic.json"));
+  // The tour records the ceiling it was taught under; a replay told another height is refused
+  // naming the tour, before the base is commanded at all.
+  const auto tour = core::ceiling::load_ceiling_tour(dir / "map" / "ceiling_tour.json");
+  ASSERT_TRUE(tour.ceiling.has_value());
+  EXPECT_DOUBLE_EQ(tour.ceiling->height_m, world->ceiling_height_m);
+  EXPECT_NEAR(tour.ceiling->above_camera_m, world->ceiling_height_m - 1.17, 0.02);
+  const std::vector<std::string> other_height = {
+      "--set", "robot.ceiling_height_m=" + std::to_string(world->ceiling_height_m + 0.4)};
+  const size_t commands_before = robot.command_log().size();
+  test::AppProcess wrong(
+      test::cat(test::cat(test::cat({"replay", "--robot", server.url(), "--map",
+                                     (dir / "map").string(), "--max-frames", "60"},
+                                    ceiling),
+                          kQvga),
+                other_height),
+      dir, "wrong_height");
+  EXPECT_EQ(wrong.wait(), 4) << wrong.both();
+  EXPECT_NE(wrong.err().find("ceiling_tour.json: taught under a ceiling"), std::string::npos)
+      << wrong.both();
+  EXPECT_EQ(robot.command_log().size(), commands_before) << "the base was commanded";
   test::AppProcess replay(
       test::cat(test::cat(test::cat({"replay", "--robot", server.url(), "--map",
                                      (dir / "map").string(), "--max-frames", "60", "--events",

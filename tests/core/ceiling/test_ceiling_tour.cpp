@@ -1,5 +1,5 @@
 // The ceiling tour's file (ceiling_tour.hpp): an exact round trip (with and without the odometry
-// figure), and corruption refused with the file named: missing, truncated, a changed number (CRC),
+// figure), the taught ceiling recorded (and absent from a version-1 file), and corruption refused with the file named: missing, truncated, a changed number (CRC),
 // another format or version, an edited field with the CRC patched to agree; invalid tours are not
 // written.
 #include <gtest/gtest.h>
@@ -38,6 +38,7 @@ CeilingTour sample() {
   t.breaks = {1};
   t.odometry_disagreement_m = 0.0421;
   t.driven_m = 2.61;
+  t.ceiling = TaughtCeiling{2.75, 1.577};
   return t;
 }
 
@@ -82,6 +83,9 @@ TEST(CeilingTourFile, RoundTripIsExact) {
     EXPECT_EQ(back.breaks, t.breaks);
     EXPECT_EQ(back.odometry_disagreement_m, t.odometry_disagreement_m);
     EXPECT_EQ(back.driven_m, t.driven_m);
+    ASSERT_TRUE(back.ceiling.has_value());
+    EXPECT_EQ(back.ceiling->height_m, 2.75);
+    EXPECT_EQ(back.ceiling->above_camera_m, 1.577);
   }
   // No temporary file left beside it.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
@@ -112,8 +116,8 @@ TEST(CeilingTourFile, CorruptionIsRefusedNamingTheFile) {
     j["crc32"] = crc32(j.dump());
     write(f, j.dump());
   };
-  patched([](nlohmann::json& j) { j["format_version"] = 2; });
-  expect_refused(f, "format version 2");
+  patched([](nlohmann::json& j) { j["format_version"] = 3; });
+  expect_refused(f, "format version 3");
   patched([](nlohmann::json& j) { j["format"] = "pepper-ceiling-mosaic"; });
   expect_refused(f, "not a ceiling tour file");
   patched([](nlohmann::json& j) { j["relay_images"][1]["frame"] = 0; });
@@ -128,6 +132,27 @@ TEST(CeilingTourFile, CorruptionIsRefusedNamingTheFile) {
   expect_refused(f, "missing or mistyped field");
   patched([](nlohmann::json& j) { j["odometry_disagreement_m"] = -0.1; });
   expect_refused(f, "odometry_disagreement_m");
+  patched([](nlohmann::json& j) { j["ceiling"]["above_camera_m"] = 3.0; });
+  expect_refused(f, "ceiling: above_camera_m");
+  patched([](nlohmann::json& j) { j.erase("ceiling"); });
+  expect_refused(f, "missing or mistyped field");
+}
+
+// A tour written before the ceiling was recorded (format version 1) still loads, without it.
+TEST(CeilingTourFile, VersionOneLoadsWithoutTheCeiling) {
+  test::TempDir dir("ceiling_tour");
+  const fs::path f = dir.path() / "ceiling_tour.json";
+  save_ceiling_tour(sample(), f);
+  nlohmann::json j = nlohmann::json::parse(read(f));
+  ASSERT_EQ(j.at("format_version"), kCeilingTourFormatVersion);
+  j["format_version"] = 1;
+  j.erase("ceiling");
+  j.erase("crc32");
+  j["crc32"] = crc32(j.dump());
+  write(f, j.dump());
+  const CeilingTour back = load_ceiling_tour(f);
+  EXPECT_FALSE(back.ceiling.has_value());
+  EXPECT_EQ(back.relay_images.size(), 3u);
 }
 
 TEST(CeilingTourFile, InvalidToursAreNotWritten) {

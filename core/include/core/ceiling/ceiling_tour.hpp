@@ -8,10 +8,11 @@
 // Frames and units: poses T_mosaic_base of the base in the mosaic frame (mosaic.hpp: metres,
 // radians counter-clockwise seen from above).
 //
-// File: {"format": "pepper-ceiling-tour", "format_version": 1, "frames", "unlocalised_frames",
+// File: {"format": "pepper-ceiling-tour", "format_version": 2, "frames", "unlocalised_frames",
 // "relay_images": [{"frame", "x_m", "y_m", "theta_rad", "landmark_ids": [...]}], "breaks": [...],
-// "odometry_disagreement_m" (null when the robot gave no odometry), "driven_m", "crc32"}: CRC-32
-// of the JSON dump without that field. Saved atomically (sibling temporary file, fsync, rename,
+// "odometry_disagreement_m" (null when the robot gave no odometry), "driven_m", "ceiling":
+// {"height_m", "above_camera_m"}, "crc32"}: CRC-32 of the JSON dump without that field. Version 1
+// (before the ceiling was recorded) is still read, with no "ceiling": a replay cannot check it. Saved atomically (sibling temporary file, fsync, rename,
 // folder fsync); loading validates everything and every problem throws CeilingTourError whose
 // message starts with the file's path.
 
@@ -26,7 +27,14 @@
 
 namespace pepper::core::ceiling {
 
-inline constexpr int kCeilingTourFormatVersion = 1;
+inline constexpr int kCeilingTourFormatVersion = 2;  ///< written; 1 is still read
+
+/// The ceiling the teach saw: its distance above the camera sets the scale of every metre in the
+/// mosaic and the tour, so a replay must see the same ceiling (ceiling_replay.hpp checks it).
+struct TaughtCeiling {
+  double height_m = 0.0;        ///< above the floor (robot.ceiling_height_m or the mock's world)
+  double above_camera_m = 0.0;  ///< above the optical centre at the teach's head pitch, > 0
+}; 
 
 struct RelayImageRecord {
   int64_t frame = -1;                 ///< teach frame index (0 = the tour's first), >= 0
@@ -43,6 +51,8 @@ struct CeilingTour {
   /// both relative to the first frame, m; nullopt without odometry. Either may have drifted.
   std::optional<double> odometry_disagreement_m;
   double driven_m = 0.0;  ///< the tour's length (the map's measure), >= 0
+  /// The teach's ceiling; nullopt only in files of format version 1.
+  std::optional<TaughtCeiling> ceiling;
 
   /// Messages naming each invalid field; empty when valid.
   std::vector<std::string> validate() const;
