@@ -230,12 +230,12 @@ constexpr double kPassedByCommandsFactor = 2.0;
 // --disturbance light --light-factor 1.4 --trace DIR`).
 constexpr double kFloorLineMaxAngleRad = 0.5;
 
-// The heading of the odometry estimate has a sigma (heading_sigma_rad_), the odometry's error
-// model: it grows by kOdometryYawErrorPerRad of every turn and kOdometryYawErrorPerM per metre
-// (margins above the mock's model of wheel odometry, 3 % of the turn and 0.001 rad/s of bias,
-// docs/mock_robot.md "Odometry"; not measured on a real Pepper), is kPlacedHeadingSigmaRad when a
-// (re)localisation places the estimate at a key image's taught pose, and shrinks with each VNHV
-// fix (kFixErrors below). Where no VNHV fix corrects the
+// The heading of the odometry estimate has a sigma (errors_, estimate_errors.hpp), the
+// odometry's error model: it grows by kOdometryYawErrorPerRad of every turn and
+// kOdometryYawErrorPerM per metre (margins above the mock's model of wheel odometry, 3 % of the
+// turn and 0.001 rad/s of bias, docs/mock_robot.md "Odometry"; not measured on a real Pepper), is
+// kPlacedHeadingSigmaRad when a (re)localisation places the estimate at a key image's taught
+// pose, and shrinks with each VNHV fix (kFixErrors below). Where no VNHV fix corrects the
 // estimate, the heading relative to IN from the matched horizontal lines (geometry/line_yaw.hpp)
 // corrects the heading, as the room's or a moved object's (kLineYawErrors below).
 constexpr double kOdometryYawErrorPerRad = 0.05;
@@ -243,8 +243,8 @@ constexpr double kOdometryYawErrorPerM = 0.01;
 constexpr double kPlacedHeadingSigmaRad = 0.1;
 constexpr double kMinLineYawSigmaRad = 0.005;  // the lines' own sigma, floored: sway, lens
 constexpr double kHeadingGateSigmas = 3.0;
-// The estimate's position sigmas along and across the robot's heading (along_sigma_m_,
-// lateral_sigma_m_), the same kind of model: along grows by kOdometryDistanceErrorPerM of every
+// The estimate's position sigmas along and across the robot's heading (errors_: along and
+// across), the same kind of model: along grows by kOdometryDistanceErrorPerM of every
 // metre (a margin above the mock's 1.5 % scale error), across by the heading's sigma times the
 // metre (a heading error turns into a sideways one); both are kPlacedPositionSigmaM when a
 // (re)localisation places the estimate at a key image's taught pose (starts are up to 0.4 m along
@@ -278,11 +278,13 @@ constexpr FixErrorMixtureOptions kFixErrors{/*usual_sigma=*/{0.05, 0.01, 0.005},
 // minus the true yaw relative to IN): per-segment mean RMS 0.0045 rad, max 0.020 (room_corridor_
 // room's IN 6, in runs 1 and 2); within a segment RMS 0.0032 rad (below the floor
 // kMinLineYawSigmaRad). The room's sigma, 0.01 rad, covers that maximum at two sigmas; a moved
-// object's, 0.1 rad, a shelf turned by up to about 15 degrees. Only the heading axis is used.
-constexpr FixErrorMixtureOptions kLineYawErrors{/*usual_sigma=*/{1.0, 1.0, 0.01},
-                                                /*moved_sigma=*/{1.0, 1.0, 0.1},
-                                                /*noise_sigma=*/{1.0, 1.0, kMinLineYawSigmaRad},
-                                                /*moved_prior=*/0.1};
+// object's, 0.1 rad, a shelf turned by up to about 15 degrees. The heading axis alone.
+constexpr double kNotModelled = std::numeric_limits<double>::quiet_NaN();
+constexpr FixErrorMixtureOptions kLineYawErrors{
+    /*usual_sigma=*/{kNotModelled, kNotModelled, 0.01},
+    /*moved_sigma=*/{kNotModelled, kNotModelled, 0.1},
+    /*noise_sigma=*/{kNotModelled, kNotModelled, kMinLineYawSigmaRad},
+    /*moved_prior=*/0.1};
 // The floor lines' lateral position has the same two kinds of error: a segment's floor lines
 // are IN's, and a moved bench's or shelf's foot on the floor is a floor line too (room_corridor_
 // room, furniture, run 8: the floor lines put the robot 15-25 cm right of where it was, for a
@@ -293,9 +295,10 @@ constexpr FixErrorMixtureOptions kLineYawErrors{/*usual_sigma=*/{1.0, 1.0, 0.01}
 // room_corridor_room one frame. Within a segment RMS 2.4 and 0.25 cm, below the lines' own
 // reported sigma (median 6.8 and 1.3 cm), which is each fix's noise here (the option's 1 cm is
 // its floor). The room's sigma, 4 cm, is about the measured maximum; a moved object's 0.3 m.
-constexpr FixErrorMixtureOptions kFloorErrors{/*usual_sigma=*/{1.0, 0.04, 1.0},
-                                              /*moved_sigma=*/{1.0, 0.3, 1.0},
-                                              /*noise_sigma=*/{1.0, 0.01, 1.0},
+// The across axis alone.
+constexpr FixErrorMixtureOptions kFloorErrors{/*usual_sigma=*/{kNotModelled, 0.04, kNotModelled},
+                                              /*moved_sigma=*/{kNotModelled, 0.3, kNotModelled},
+                                              /*noise_sigma=*/{kNotModelled, 0.01, kNotModelled},
                                               /*moved_prior=*/0.1};
 // Turning on the spot on odometry: yaw rate per radian still to turn, 1/s; and the heading error
 // (rad) beyond which the robot turns on the spot before driving on.
@@ -319,6 +322,7 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
       extractor_(map_.camera, options.extractor),
       schedule_(options.schedule),
       vnhv_filter_(options.vnhv.filter),
+      errors_(kFixErrors, kLineYawErrors, kFloorErrors),
       tracker_(taught_odometry(map_)) {
   options_.ibvs.mode = options_.features;
   options_.matcher = matcher_for(options_.features, options_.matcher);
@@ -328,7 +332,6 @@ Navigator::Navigator(memory::VisualMemory map, const NavigatorOptions& options)
   if (map_.key_images.size() < 2) {
     throw std::invalid_argument("Navigator: the map has fewer than 2 key images");
   }
-  begin_fix_errors();
 }
 
 void Navigator::reset() {
@@ -350,18 +353,8 @@ void Navigator::reset() {
   odom_.reset();
   blind_m_ = blind_rad_ = 0.0;
   odom_since_fix_m_ = 1e9;
-  heading_sigma_rad_ = kPlacedHeadingSigmaRad;
-  along_sigma_m_ = lateral_sigma_m_ = kPlacedPositionSigmaM;
-  begin_fix_errors();
+  errors_.place({kPlacedPositionSigmaM, kPlacedPositionSigmaM, kPlacedHeadingSigmaRad});
   drift_report_pending_ = false;
-}
-
-void Navigator::begin_fix_errors() {
-  line_yaw_in_ = -1;  // the lines' models start again with their next measurement
-  floor_in_ = -1;
-  fix_errors_.begin(kFixErrors,
-                    {along_sigma_m_ * along_sigma_m_, lateral_sigma_m_ * lateral_sigma_m_,
-                     heading_sigma_rad_ * heading_sigma_rad_});
 }
 
 void Navigator::ensure_pyramids(const localization::Segment& seg) {
@@ -479,9 +472,7 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
       constexpr double kAgreeM = 1.0;
       if (!X || std::hypot(X->x_m - best.x_m, X->y_m - best.y_m) > kAgreeM) {
         tracker_.set(best, *odom_, report.result.segment->prev);
-        heading_sigma_rad_ = kPlacedHeadingSigmaRad;
-        along_sigma_m_ = lateral_sigma_m_ = kPlacedPositionSigmaM;
-        begin_fix_errors();
+        errors_.place({kPlacedPositionSigmaM, kPlacedPositionSigmaM, kPlacedHeadingSigmaRad});
       } else {
         tracker_.set(*X, *odom_, report.result.segment->prev);
       }
@@ -630,7 +621,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     vnhv_segment_next_ = seg.next;
     vnhv_filter_.reset();
     vnhv_model_.reset();
-    begin_fix_errors();  // a new model: its fixes' shared error is new too
+    errors_.begin();  // a new model: its fixes' shared error is new too
     vnhv_pose_ = o.pose;
     const double taught_m = segment_taught_m();
     const features::TwoViewMatches next_prev =
@@ -702,8 +693,8 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
       tel.odom_lateral_m = dev->lateral_m;
       tel.odom_heading_rad = dev->heading_rad;
     }
-    tel.odom_lateral_sigma_m = lateral_sigma_m_;
-    tel.odom_heading_sigma_rad = heading_sigma_rad_;
+    tel.odom_lateral_sigma_m = lateral_sigma_m();
+    tel.odom_heading_sigma_rad = heading_sigma_rad();
   }
   if (fix && !fix->within_prior) {
     if (const auto dev = deviation_of(fix->pose)) {
@@ -727,17 +718,9 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
         // Per axis of the robot, against the error this segment's fixes share.
         const OdometryPose y = between(*tracker_.estimate(), fix_teach);
         fix_correction_ = std::make_pair(std::hypot(y.x_m, y.y_m), std::abs(y.yaw_rad));
-        const Axes3 d = fix_errors_.update({y.x_m, y.y_m, y.yaw_rad}, fix_weight);
+        const Axes3 d = errors_.update(FixSource::kVnhv, {y.x_m, y.y_m, y.yaw_rad}, fix_weight);
         tracker_.shift(OdometryPose{d[0], d[1], d[2]});
-        const Axes3 var = fix_errors_.variance();
-        if (line_yaw_in_ >= 0) {
-          line_yaw_errors_.rescale(2, heading_sigma_rad_ * heading_sigma_rad_, var[2]);
-        }
-        if (floor_in_ >= 0) floor_errors_.rescale(1, lateral_sigma_m_ * lateral_sigma_m_, var[1]);
-        along_sigma_m_ = std::sqrt(var[0]);
-        lateral_sigma_m_ = std::sqrt(var[1]);
-        heading_sigma_rad_ = std::sqrt(var[2]);
-        room_probability = fix_errors_.usual_probability();
+        room_probability = errors_.model(FixSource::kVnhv).usual_probability();
         tel.vnhv_fix_room_probability = room_probability;
       }
       // A segment whose fixes are more likely a moved object's did not locate the robot.
@@ -1097,17 +1080,10 @@ void Navigator::follow_odometry(const Frame& frame) {
     // The odometry's heading error grows with every turn and every metre (systematic errors:
     // their bounds add up linearly).
     const double d_along = kOdometryDistanceErrorPerM * moved_m;
-    const double d_lateral = heading_sigma_rad_ * moved_m;
+    const double d_lateral = heading_sigma_rad() * moved_m;
     const double d_heading =
         kOdometryYawErrorPerRad * std::abs(d.yaw_rad) + kOdometryYawErrorPerM * moved_m;
-    along_sigma_m_ += d_along;
-    lateral_sigma_m_ += d_lateral;
-    heading_sigma_rad_ += d_heading;
-    fix_errors_.grow(0, d_along);
-    fix_errors_.grow(1, d_lateral);
-    fix_errors_.grow(2, d_heading);
-    if (line_yaw_in_ >= 0) line_yaw_errors_.grow(2, d_heading);
-    if (floor_in_ >= 0) floor_errors_.grow(1, d_lateral);
+    errors_.grow({d_along, d_lateral, d_heading});
   }
   tracker_.predict(*frame.odom);
   odom_ = frame.odom;
@@ -1152,18 +1128,14 @@ Navigator::LinePairs Navigator::line_pairs_with(features::FrameMatcher& fm, int 
 }
 
 void Navigator::correct_heading_from_lines(const LinePairs& pairs, int in, Telemetry& tel) {
-  const double p = heading_sigma_rad_ * heading_sigma_rad_;
-  if (in != line_yaw_in_) {
-    line_yaw_errors_.begin(kLineYawErrors, {1.0, 1.0, p});
-    line_yaw_in_ = in;
-  }
+  const FixErrorMixture& model = errors_.model_for(FixSource::kLineYaw, in);
   // Only line structures where the room's lines are expected compete (a moved shelf's boards
   // are as horizontal as the skirting; line_yaw.hpp): the room hypothesis's expectation.
   const double estimate_in_rad =
       std::remainder(tracker_.estimate()->yaw_rad - tracker_.taught(in).yaw_rad, 2.0 * M_PI);
   const geometry::YawPrior prior{
-      estimate_in_rad + line_yaw_errors_.expected()[2],
-      std::max(std::sqrt(line_yaw_errors_.expected_var()[2]), kMinLineYawSigmaRad)};
+      estimate_in_rad + model.expected()[2],
+      std::max(std::sqrt(model.expected_var()[2]), kMinLineYawSigmaRad)};
   const auto yaw = geometry::estimate_line_yaw(pairs, options_.matcher.essential.camera_pitch_rad,
                                                geometry::LineYawOptions{}, &prior);
   if (!yaw) return;
@@ -1176,20 +1148,18 @@ void Navigator::correct_heading_from_lines(const LinePairs& pairs, int in, Telem
   // A yaw beyond kHeadingGateSigmas of where the room's is expected is one frame's outlier (a
   // mismatched or non-horizontal line the estimator's consensus kept, often with 1-5 lines in a
   // turn), not a segment's shared error: it is not taken, and not weighed as evidence either.
-  const double expected_rad = line_yaw_errors_.expected()[2];
-  const double gate_var = line_yaw_errors_.expected_var()[2] + sigma_r * sigma_r;
+  const double expected_rad = model.expected()[2];
+  const double gate_var = model.expected_var()[2] + sigma_r * sigma_r;
   if (std::pow(innovation_rad - expected_rad, 2) >
       kHeadingGateSigmas * kHeadingGateSigmas * gate_var) {
     return;
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const double move_rad = line_yaw_errors_.update({nan, nan, innovation_rad}, weight)[2];
+  const double move_rad =
+      errors_.update(FixSource::kLineYaw, {nan, nan, innovation_rad}, weight)[2];
   tracker_.shift(OdometryPose{0.0, 0.0, move_rad});
   tel.line_yaw_correction_rad = move_rad;
-  tel.line_yaw_room_probability = line_yaw_errors_.usual_probability();
-  const double after = line_yaw_errors_.variance()[2];
-  heading_sigma_rad_ = std::sqrt(after);
-  fix_errors_.rescale(2, p, after);
+  tel.line_yaw_room_probability = model.usual_probability();
 }
 
 void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in, Telemetry& tel) {
@@ -1205,19 +1175,16 @@ void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in
   geometry::FloorPrior prior;
   prior.t_m = Eigen::Vector2d(rel.x_m, rel.y_m) + lever;
   prior.yaw_rad = rel.yaw_rad;
-  prior.yaw_sigma_rad = heading_sigma_rad_;
+  prior.yaw_sigma_rad = heading_sigma_rad();
   // The estimate's sigmas are along and across the robot, turned by rel.yaw from IN's axes.
   const Eigen::Matrix2d R_m = R.toRotationMatrix();
-  const Eigen::Vector2d var(std::pow(along_sigma_m_, 2), std::pow(lateral_sigma_m_, 2));
+  const Eigen::Vector2d var(std::pow(along_sigma_m(), 2), std::pow(lateral_sigma_m(), 2));
   prior.cov_m2 = R_m * var.asDiagonal() * R_m.transpose();
   // Only floor lines where the room's are expected compete (a moved bench's foot is a floor line
   // too): the room hypothesis's expectation (kFloorErrors).
-  if (in != floor_in_) {
-    floor_errors_.begin(kFloorErrors, {1.0, var(1), 1.0});
-    floor_in_ = in;
-  }
-  prior.t_m.y() += floor_errors_.expected()[1];
-  prior.cov_m2(1, 1) += floor_errors_.expected_var()[1] - var(1);
+  const FixErrorMixture& model = errors_.model_for(FixSource::kFloorLines, in);
+  prior.t_m.y() += model.expected()[1];
+  prior.cov_m2(1, 1) += model.expected_var()[1] - var(1);
   // The lateral position only: lines along IN's view (floor-wall edges, skirtings); what lines
   // across it would say about the position along (kFloorLineMaxAngleRad) is not taken.
   geometry::FloorLineOptions lo;
@@ -1237,21 +1204,17 @@ void Navigator::correct_position_from_floor_lines(const LinePairs& pairs, int in
   tel.floor_lateral_lines_sigma_m = std::sqrt(lines_var_m2);
   // Against the room's or a moved object's shared error (kFloorErrors), on the robot's across
   // axis (IN's, turned by rel.yaw: small on the straight segments where floor lines are used).
-  const double p_lateral = var(1);
   const double noise_m = kFloorErrors.noise_sigma[1];
   const double weight = std::min(1.0, noise_m * noise_m / lines_var_m2);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double innovation_m = (lines_y_m - (rel.y_m + lever.y())) * std::cos(rel.yaw_rad);
-  const double move_m = floor_errors_.update({nan, innovation_m, nan}, weight)[1];
+  const double move_m = errors_.update(FixSource::kFloorLines, {nan, innovation_m, nan}, weight)[1];
   tracker_.shift(OdometryPose{0.0, move_m, 0.0});
-  const double after = floor_errors_.variance()[1];
-  fix_errors_.rescale(1, p_lateral, after);
-  lateral_sigma_m_ = std::sqrt(after);
   tel.floor_lateral_after_m = between(tracker_.taught(in), *tracker_.estimate()).y_m;
-  tel.floor_room_probability = floor_errors_.usual_probability();
+  tel.floor_room_probability = model.usual_probability();
   // The room's lines located the robot across the path: the odometry may steer
   // (odometry_steers), as after a VNHV fix.
-  if (lateral_sigma_m_ <= kLocatedLateralSigmaM && floor_errors_.usual_probability() >= 0.5) {
+  if (lateral_sigma_m() <= kLocatedLateralSigmaM && model.usual_probability() >= 0.5) {
     odom_since_fix_m_ = 0.0;
   }
 }
@@ -1263,7 +1226,8 @@ std::optional<control::PosePrior> Navigator::resection_prior(int in) const {
   // Where the estimate puts the robot in IN's taught frame, in segment units; the camera's own
   // offset ahead of the base changes that by under a centimetre at the segments' yaws.
   // The next fix is expected at the estimate plus the error this segment's fixes share so far.
-  const Axes3 shared = fix_errors_.expected();
+  const FixErrorMixture& fixes = errors_.model(FixSource::kVnhv);
+  const Axes3 shared = fixes.expected();
   const OdometryPose expected =
       compose(*tracker_.estimate(), OdometryPose{shared[0], shared[1], shared[2]});
   const OdometryPose p = between(tracker_.taught(in), expected);
@@ -1272,7 +1236,7 @@ std::optional<control::PosePrior> Navigator::resection_prior(int in) const {
   // The estimate's sigmas are along and across the robot; IN's axes are turned by p.yaw_rad from
   // them (the small correlation this leaves out does not matter at a gate).
   const double c2 = std::pow(std::cos(p.yaw_rad), 2), s2 = 1.0 - c2;
-  const Axes3 var = fix_errors_.expected_var();
+  const Axes3 var = fixes.expected_var();
   const double var_along = var[0], var_lateral = var[1];
   prior.sigma_x = std::sqrt(c2 * var_along + s2 * var_lateral) / vnhv_m_per_unit_;
   prior.sigma_y = std::sqrt(s2 * var_along + c2 * var_lateral) / vnhv_m_per_unit_;

@@ -161,6 +161,37 @@ TEST(FixErrorMixture, ASourceOfOneAxisMovesOnlyThatAxis) {
   EXPECT_NEAR(m.usual_probability(), 0.9, 1e-12);
 }
 
+TEST(FixErrorMixture, AnAxisNotModelledIsNaNAndRefusesMeasurements) {
+  // The floor lines model the across axis alone: the other axes' sigmas are NaN.
+  const double nan = std::nan("");
+  FixErrorMixtureOptions o;
+  o.usual_sigma = {nan, 0.04, nan};
+  o.moved_sigma = {nan, 0.3, nan};
+  o.noise_sigma = {nan, 0.01, nan};
+  FixErrorMixture m;
+  m.begin(o, {0.0, 0.0009, -1.0});  // the other axes' variances are not read
+  EXPECT_FALSE(m.models(0));
+  EXPECT_TRUE(m.models(1));
+  const Axes3 d = m.update({nan, 0.01, nan}, 1.0);
+  EXPECT_EQ(d[0], 0.0);
+  EXPECT_GT(d[1], 0.0);
+  EXPECT_EQ(d[2], 0.0);
+  EXPECT_TRUE(std::isnan(m.variance()[0]));
+  EXPECT_LT(m.variance()[1], 0.0009);
+  EXPECT_TRUE(std::isnan(m.expected()[2]));
+  EXPECT_TRUE(std::isnan(m.expected_var()[2]));
+  EXPECT_THROW(m.update({0.01, 0.01, nan}, 1.0), std::invalid_argument);
+  EXPECT_THROW(m.grow(0, 0.01), std::invalid_argument);
+  EXPECT_THROW(m.rescale(2, 1.0, 0.5), std::invalid_argument);
+  // Some but not all of an axis's sigmas NaN, or no axis modelled: refused.
+  FixErrorMixtureOptions half = o;
+  half.noise_sigma[0] = 0.01;
+  EXPECT_THROW(m.begin(half, {1.0, 1.0, 1.0}), std::invalid_argument);
+  FixErrorMixtureOptions none = o;
+  none.usual_sigma[1] = none.moved_sigma[1] = none.noise_sigma[1] = nan;
+  EXPECT_THROW(m.begin(none, {1.0, 1.0, 1.0}), std::invalid_argument);
+}
+
 TEST(FixErrorMixture, BadInputIsRefused) {
   FixErrorMixture m;
   const Axes3 var{0.01, 0.01, 0.01};

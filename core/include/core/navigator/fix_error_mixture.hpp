@@ -23,9 +23,12 @@
 // with the estimate: DeadReckoning.TelemetryShowsThePredictionTheFixesAreWeighedAgainst.) A few fixes that keep reading far from the odometry make "moved" likely, and then
 // they hardly move the estimate; fixes near it keep "usual" and are used as before.
 //
-// Axes: 0 along the robot, 1 across it, 2 heading (m, m, rad). Pure; not thread-safe.
+// Axes: 0 along the robot, 1 across it, 2 heading (m, m, rad). A source that measures only some
+// axes (the lines' heading, the floor lines' lateral position) leaves the others unmodelled: NaN
+// sigmas there. Pure; not thread-safe.
 
 #include <array>
+#include <cmath>
 
 #include "core/navigator/shared_fix_error.hpp"
 
@@ -33,28 +36,38 @@ namespace pepper::core::navigator {
 
 using Axes3 = std::array<double, 3>;
 
+/// Per axis, > 0; all three NaN on an axis the source does not measure (not modelled).
 struct FixErrorMixtureOptions {
   Axes3 usual_sigma{0.03, 0.01, 0.005};  ///< shared error when the structure is the room
   Axes3 moved_sigma{0.5, 0.3, 0.1};      ///< shared error when it is a moved object
   Axes3 noise_sigma{0.05, 0.01, 0.003};  ///< each fix's own white noise
   double moved_prior = 0.1;              ///< probability of "moved" for a new segment, (0, 1)
+
+  /// Whether axis `axis` is modelled (its sigmas are not NaN).
+  bool models(int axis) const { return !std::isnan(usual_sigma[static_cast<size_t>(axis)]); }
 };
 
 class FixErrorMixture {
  public:
   /// A new segment model (or a placed estimate), from the estimate's variances now. Throws
-  /// std::invalid_argument for sigmas <= 0, a prior outside (0, 1) or a variance <= 0.
+  /// std::invalid_argument for sigmas <= 0 (or NaN on some but not all three of an axis, or on
+  /// every axis), a prior outside (0, 1) or a variance <= 0.
   void begin(const FixErrorMixtureOptions& options, const Axes3& est_var);
-  /// One fix: the innovation (fix minus the estimate, robot axes; NaN on an axis the source
-  /// does not measure, e.g. the lines' heading alone) and the fix's weight in (0, 1] (divides
+  /// One fix: the innovation (fix minus the estimate, robot axes; NaN on an axis the fix does
+  /// not measure, and always on the axes not modelled) and the fix's weight in (0, 1] (divides
   /// the noise variance). Each hypothesis updates its own estimate; returns the move of the
   /// mixture's mean (on an unmeasured axis only where the hypotheses' estimates differ and their
   /// probabilities change), by which the caller moves the estimate. Throws
-  /// std::invalid_argument for an infinite innovation or a weight outside (0, 1].
+  /// std::invalid_argument for an infinite innovation, one on an axis not modelled, or a weight
+  /// outside (0, 1].
   Axes3 update(const Axes3& innovation, double weight);
-  /// The mixture's variance per axis (the estimate's, for the caller's sigmas).
+  /// The mixture's variance per axis (the estimate's, for the caller's sigmas). This and
+  /// expected(), expected_var() are NaN on the axes not modelled.
   Axes3 variance() const;
-  /// The odometry grew axis `axis`'s sigma by `d_sigma` (>= 0): every hypothesis's too.
+  /// Whether axis `axis` is modelled (FixErrorMixtureOptions::models).
+  bool models(int axis) const { return options_.models(axis); }
+  /// The odometry grew axis `axis`'s sigma by `d_sigma` (>= 0): every hypothesis's too. Axes
+  /// below (grow, rescale) must be modelled: std::invalid_argument otherwise.
   void grow(int axis, double d_sigma);
   /// Another source corrected the estimate's axis `axis` by a Kalman update that took its
   /// variance from `before` to `after`: every hypothesis's variance scales alike.

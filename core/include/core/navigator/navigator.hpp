@@ -56,7 +56,7 @@
 #include "core/localization/key_image_logic.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "core/navigator/path_tracker.hpp"
-#include "core/navigator/fix_error_mixture.hpp"
+#include "core/navigator/estimate_errors.hpp"
 #include "core/navigator/telemetry.hpp"
 #include "core/navigator/transitions.hpp"
 
@@ -298,7 +298,7 @@ class Navigator {
   /// nullopt without odometry or a segment scale.
   std::optional<control::PosePrior> resection_prior(int in) const;
   /// Without a VNHV fix this frame: the heading relative to IN from the lines matched with it
-  /// corrects the odometry estimate's heading (line_yaw_errors_; telemetry line_yaw_*).
+  /// corrects the odometry estimate's heading (errors_, FixSource::kLineYaw; telemetry line_yaw_*).
   /// The verified line matches with key image `key_index` as normalised segment pairs (key,
   /// current).
   using LinePairs = std::vector<std::pair<geometry::NormSegment, geometry::NormSegment>>;
@@ -349,30 +349,16 @@ class Navigator {
   bool vnhv_unlocated_ = true;
   /// This frame, a VNHV fix corrected the odometry estimate.
   bool fixed_this_frame_ = false;
-  /// Sigma of the odometry estimate's heading (rad): the odometry's error model (navigator.cpp,
-  /// kOdometryYawErrorPerRad) and the line-yaw Kalman update.
-  double heading_sigma_rad_ = 0.1;
-  /// Sigmas of the odometry estimate's position along and across the robot's heading (m), the
-  /// same model: they grow with the distance driven (across: times the heading's sigma) and
-  /// shrink with each VNHV fix. With heading_sigma_rad_ they are the prior that tells the room
-  /// from a moved object in the resection (control::PosePrior).
-  double along_sigma_m_ = 0.5, lateral_sigma_m_ = 0.5;
-  /// The error the current segment's VNHV fixes share, per axis of the robot (along, across,
-  /// heading), as the room's or a moved object's (fix_error_mixture.hpp): begun with each
-  /// segment model.
-  FixErrorMixture fix_errors_;
-  /// The same model for the heading from the lines matched with IN (the heading axis alone):
-  /// every line yaw of a segment comes from IN's lines and the structure they belong to, a moved
-  /// shelf's as well as the room's. Begun at the first line yaw with IN = line_yaw_in_.
-  FixErrorMixture line_yaw_errors_;
-  int line_yaw_in_ = -1;
-  /// The same model for the lateral position from the floor lines matched with IN (the across
-  /// axis alone): a moved bench's foot is a floor line too. Begun at the first floor fix with
-  /// IN = floor_in_.
-  FixErrorMixture floor_errors_;
-  int floor_in_ = -1;
-  /// New segment model or a placed estimate: the shared fix errors start again.
-  void begin_fix_errors();
+  /// The odometry estimate's sigmas (along and across the robot's heading, m; the heading, rad)
+  /// and the room-or-moved models of the VNHV fixes, the heading from lines and the floor lines
+  /// that correct it (estimate_errors.hpp). The sigmas grow with the odometry's error model
+  /// (navigator.cpp, kOdometryYawErrorPerRad: across times the heading's sigma) and shrink with
+  /// each correction; they are the prior that tells the room from a moved object in the
+  /// resection (control::PosePrior).
+  EstimateErrors errors_;
+  double along_sigma_m() const { return errors_.sigma()[0]; }
+  double lateral_sigma_m() const { return errors_.sigma()[1]; }
+  double heading_sigma_rad() const { return errors_.sigma()[2]; }
   /// This frame, odometry places the robot on a piece of the taught path that teaching turned on
   /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
   /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.
