@@ -153,7 +153,9 @@ const std::array<SwitchRule, 6> kSwitchRules{{
   {"passed IN by travel (odometry)", Kind::kAddition,
    "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
    kCriterionPassedByOdometry, passed_by_odometry,
-   "scale unknown and the robot's odometry, carried along the taught path, is past IN"},
+   "the robot's odometry, carried along the taught path, is past IN: when the scale is "
+   "unknown at once, when it is known by 2 sigmas of the estimate along the robot (a scene "
+   "metres away hardly changes scale over tens of centimetres)"},
   {"passed IN by travel (commands)", Kind::kAddition, "",
    kCriterionPassedByDistance, passed_by_distance,
    "the same where there is no odometry (map or robot): the commands drove twice the taught "

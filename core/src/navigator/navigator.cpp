@@ -222,6 +222,9 @@ std::vector<std::optional<OdometryPose>> taught_odometry(const memory::VisualMem
 // with 2 it switched after 0.18 m and completed (1.7 / 4.4 cm). Since then the map keeps
 // odometry, and the odometry source of the rule took over there.
 constexpr double kPassedByCommandsFactor = 2.0;
+// "Passed IN by odometry" while vision's scale ratio is known: the estimate past IN by this many
+// sigmas along the robot (one-sided, P = 0.98).
+constexpr double kPassedSigmas = 2.0;
 // Floor lines (geometry/floor_lines.hpp) correct the odometry estimate's lateral position only,
 // from lines within this angle of IN's forward axis. Why: in white_corridor under light x1.4 the
 // along position from lines across the view (the lamps' reflections in the shiny floor, which
@@ -842,8 +845,14 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
   }
   // Odometry along the taught path (when the frame and the map have it): past IN?
   std::optional<double> odom_progress;
+  double past_next_m = kNaN;  // the estimate's distance along the taught path past IN
   if (odom_ && tracker_.usable()) {
-    if (const auto d = tracker_.deviation()) odom_progress = d->progress;
+    if (const auto d = tracker_.deviation()) {
+      odom_progress = d->progress;
+      past_next_m = d->s_m - tracker_.length_to_m(seg.next);
+      tel.odom_past_next_m = past_next_m;
+      tel.odom_along_sigma_m = along_sigma_m();
+    }
   }
   if (odom_progress) tel.odom_progress = *odom_progress;
   const bool odom_passed_next = odom_progress && *odom_progress >= seg.next;
@@ -854,7 +863,13 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
   // consulted where odometry exists: off there, the generated set kept 80/80 and its lateral RMS
   // went down (docs/method/navigator.md, session 22 ablation).
   const bool has_odometry = odom_ && tracker_.usable();
-  counts.passed_by_odometry = odom_passed_next && std::isnan(counts.next_scale_ratio);
+  // Where the scale ratio is known but has not said "passed" (it hardly changes over tens of
+  // centimetres when IN's points are metres away), the estimate must be past IN by
+  // kPassedSigmas x its sigma along the robot: P(passed) >= 0.98 (gen_room_1, VGA: the robot
+  // drove 0.49 m past IN with the odometry estimate within 1 cm of the truth, then turned late).
+  counts.passed_by_odometry =
+      odom_passed_next && (std::isnan(counts.next_scale_ratio) ||
+                           past_next_m >= kPassedSigmas * along_sigma_m());
   if (!has_odometry && seg.next_next && segment_from_switch_ &&
       std::isnan(counts.next_scale_ratio)) {
     counts.passed_by_distance = segment_driven_m_ >= kPassedByCommandsFactor * segment_taught_m();

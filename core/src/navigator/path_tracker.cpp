@@ -148,6 +148,7 @@ std::optional<PathDeviation> TaughtPathTracker::deviation() {
   PathDeviation d;
   d.piece = piece_;
   d.progress = piece_ + std::clamp(f, 0.0, 1.0);
+  d.s_m = *last_s_m_;
   d.in_place = piece_in_place(piece_);
   if (d.in_place) {
     d.remaining_turn_rad = wrap(b.yaw_rad - X_->yaw_rad);

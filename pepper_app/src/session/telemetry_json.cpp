@@ -64,6 +64,8 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"odom_lateral_m", num(t.odom_lateral_m)},
       {"odom_heading_rad", num(t.odom_heading_rad)},
       {"odom_lateral_sigma_m", num(t.odom_lateral_sigma_m)},
+      {"odom_past_next_m", num(t.odom_past_next_m)},
+      {"odom_along_sigma_m", num(t.odom_along_sigma_m)},
       {"odom_heading_sigma_rad", num(t.odom_heading_sigma_rad)},
       {"omega_demand_rad_s", num(t.omega_demand_rad_s)},
       {"omega_feedforward_rad_s", num(t.omega_feedforward_rad_s)},

@@ -325,6 +325,38 @@ TEST(Navigator, PassedByTravelUsesTheCommandsOnlyWithoutOdometry) {
   EXPECT_GT(odometry.by_odometry, 0);
 }
 
+// "Passed IN by travel (odometry)" while the scale ratio is known: the estimate must be past IN
+// by 2 sigmas along the robot. Here vision cannot switch (the guard wants IN's points at 1.9x
+// their taught size, "passed IN" by scale is off), so every switch is the odometry's; before
+// this rule took known ratios the replay stalled at the first IN.
+TEST(Navigator, PassedByOdometryWithAKnownScaleNeedsTwoSigmasPastIn) {
+  NavigatorOptions o;
+  o.switching.min_next_scale_ratio = 1.9;
+  o.switching.passed_next_scale_ratio = 0.0;
+  memory::VisualMemory map = tour().map;
+  for (memory::KeyImage& k : map.key_images) {
+    const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
+    k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+  }
+  Navigator nav(map, o);
+  int switches = 0, known_ratio_frames = 0;
+  for (const Frame& taught : tour().frames) {
+    Frame f = taught;
+    const sim::Pose2D& p = tour().path.at(static_cast<size_t>(taught.index));
+    f.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+    const StepResult r = nav.step(f);
+    const Telemetry& t = r.telemetry;
+    switches += t.switched ? 1 : 0;
+    if ((t.switch_criterion & localization::kCriterionPassedByOdometry) &&
+        std::isfinite(t.next_scale_ratio)) {
+      ++known_ratio_frames;
+      EXPECT_GE(t.odom_past_next_m, 2.0 * t.odom_along_sigma_m) << "frame " << f.index;
+    }
+  }
+  EXPECT_GE(switches, 3);
+  EXPECT_GT(known_ratio_frames, 0);
+}
+
 // turn_feedforward: where IBVS drives a segment taught as a turn, its demand is moved to the
 // taught curvature (IP -> IN turn over the taught length) times the last command's speed: raised
 // when IBVS turns slower while the commanded turn lags the taught one (floor), lowered when it

@@ -76,8 +76,8 @@ struct SwitchCounts {
   /// wanted, as for "passed IN" (criterion bit 16).
   bool passed_by_distance = false;
   /// The caller's verdict that the robot's odometry, carried along the taught path, is past IN
-  /// while the scale ratio is unknown (the navigator: navigator/path_tracker.hpp): a switch is
-  /// wanted (criterion bit 32).
+  /// (the navigator: navigator/path_tracker.hpp; at once while the scale ratio is unknown, by 2
+  /// sigmas of the estimate along the robot while it is known): a switch is wanted (bit 32).
   bool passed_by_odometry = false;
 };
 

@@ -45,6 +45,7 @@ OdometryPose between(const OdometryPose& a, const OdometryPose& b);
 /// The robot's deviation from the taught path at its progress, and the path's own turn there.
 struct PathDeviation {
   double progress = 0.0;      ///< u = piece + fraction, in key-image indices
+  double s_m = 0.0;           ///< the progress as a distance along the taught path from key 0
   int piece = 0;              ///< i: the robot is between key images i and i + 1
   bool in_place = false;      ///< piece i is a turn on the spot
   double lateral_m = 0.0;     ///< > 0 left of the piece, seen along the direction of travel
@@ -95,6 +96,8 @@ class TaughtPathTracker {
   void advance_to(int piece);
 
   int key_count() const { return static_cast<int>(taught_.size()); }
+  /// Distance along the taught path from key image 0 to key image `i` (turns on the spot: 0).
+  double length_to_m(int i) const { return length_to_m_.at(static_cast<size_t>(i)); }
   const OdometryPose& taught(int i) const { return taught_.at(static_cast<size_t>(i)); }
 
  private:
