@@ -40,10 +40,11 @@ CeilingReplay make_ceiling_replay(const sim::MockRobot* robot, double ceiling_he
   // The map's camera: the session checks that the started camera agrees with it.
   const CeilingCameraSetup setup =
       ceiling_camera_for(robot, ceiling_height_m, map.camera, head_pitch_rad);
-  check_taught_ceiling(parts.tour, setup, map_dir / kCeilingTourFileName);
+  const std::filesystem::path tour_file = map_dir / kCeilingTourFileName;
+  check_taught_ceiling(parts.tour, setup, tour_file);
   CeilingReplay r;
   if (!parts.tour.ceiling) {
-    r.warnings.push_back((map_dir / kCeilingTourFileName).string() +
+    r.warnings.push_back(tour_file.string() +
                          ": taught before tours recorded their ceiling (format version 1): this "
                          "replay cannot check that its ceiling height is the teach's; teach "
                          "again to record it");
