@@ -7,8 +7,7 @@ of two consecutive key images, the fix's lateral position (telemetry vnhv_fix_la
 the true one (the simulator's pose against the chord IP -> IN of the taught key images' true
 positions), binned by the fix's own distance from IN in segment lengths (vnhv_fix_r_units; with
 --true-distance, the true distance instead). Prints per bin: segments, fixes, RMS, p90 and max
-of the lateral error. The navigator's fix noise model (fix_noise_sigma_scale in
-core/src/navigator/navigator.cpp) is fitted to this table.
+of the lateral error (docs/method/navigator.md, "A fix's error and its distance from IN").
 
 Usage: bench/closed_loop/fix_error_by_distance.py TRACE.jsonl... [--bin B] [--true-distance]
   --bin B           bin width in segment lengths (0.25)

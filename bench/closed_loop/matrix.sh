@@ -120,5 +120,19 @@ export -f run_one
 # inherit a bash array.
 EVAL_SETS="${SETS[*]}"
 export OUT APP SIZE EVAL_SETS
-printf '%s\n' "${SELECTED[@]}" | xargs -d '\n' -P "$JOBS" -I{} bash -c 'run_one "$@"' _ {}
+# Stopping the script (Ctrl-C, kill) stops its runs too: xargs and the evaluate processes under it
+# would otherwise go on without it. A stopped run leaves no JSON (it writes *.json.tmp), so the
+# same command resumes it.
+kill_tree() {
+  local child
+  for child in $(pgrep -P "$1"); do kill_tree "$child"; done
+  kill "$1" 2> /dev/null || true
+}
+XARGS=
+trap '[[ -n $XARGS ]] && kill_tree "$XARGS"; echo "matrix.sh: stopped; the same command resumes" >&2
+      exit 143' INT TERM HUP
+printf '%s\n' "${SELECTED[@]}" | xargs -d '\n' -P "$JOBS" -I{} bash -c 'run_one "$@"' _ {} &
+XARGS=$!
+wait "$XARGS"
+trap - INT TERM HUP
 echo "tables: bench/closed_loop/combine.py $OUT/*.json --html $OUT/index.html"

@@ -36,6 +36,32 @@ grep -q "skip robotics_room_light0.6" "$TMP/log2" || fail "finished configuratio
 [[ $(wc -l < "$TMP/calls") -eq 2 ]] || fail "exactly one more call expected"
 [[ $(tail -1 "$TMP/calls") != *"--set"* ]] || fail "a --set without --set: $(tail -1 "$TMP/calls")"
 
+# Stopped: its runs stop too (no stand-in left running) and leave no JSON behind.
+cat > "$TMP/slow" <<'APP'
+#!/usr/bin/env bash
+echo $$ >> "$(dirname "$0")/slow_pids"
+sleep 30
+APP
+chmod +x "$TMP/slow"
+"$SRC/bench/closed_loop/matrix.sh" --out "$TMP/out2" --app "$TMP/slow" --gen-seeds 0 \
+    --only '^robotics_room_(none|person)$' --jobs 2 > "$TMP/log4" 2>&1 &
+M=$!
+for _ in $(seq 50); do
+  [[ -f $TMP/slow_pids && $(wc -l < "$TMP/slow_pids") -ge 2 ]] && break
+  sleep 0.1
+done
+[[ $(wc -l < "$TMP/slow_pids") -eq 2 ]] || fail "two runs expected side by side"
+kill -TERM "$M"
+wait "$M" || true
+sleep 0.5
+while read -r pid; do
+  # A killed process not yet reaped (a zombie: a container's init may be slow) has ended.
+  state=$(ps -o stat= -p "$pid" 2> /dev/null || true)
+  if [[ -n $state && $state != Z* ]]; then fail "run $pid still running after matrix.sh stopped"; fi
+done < "$TMP/slow_pids"
+ls "$TMP"/out2/*.json > /dev/null 2>&1 && fail "a stopped run left a JSON"
+grep -q "stopped; the same command resumes" "$TMP/log4" || fail "no message when stopped"
+
 if run --bogus > "$TMP/log3" 2>&1; then fail "--bogus accepted"; fi
 grep -q "unknown option --bogus" "$TMP/log3" || fail "no message for an unknown option"
 echo "matrix.sh: ok"

@@ -137,14 +137,12 @@ Axes3 FixErrorMixture::expected() const {
   return e;
 }
 
-Axes3 FixErrorMixture::expected_var(double noise_scale) const {
-  if (!(noise_scale >= 1.0) || !std::isfinite(noise_scale)) {
-    throw std::invalid_argument("FixErrorMixture: a noise scale must be >= 1 and finite");
-  }
+Axes3 FixErrorMixture::expected_var() const {
   Axes3 v{};
   for (int a = 0; a < 3; ++a) {
-    const double r_var = options_.noise_sigma[a] * options_.noise_sigma[a] * noise_scale;
-    v[a] = !models(a) ? kNaN : usual_.error[a].expected_var(usual_.var[a], r_var);
+    v[a] = !models(a) ? kNaN
+                      : usual_.error[a].expected_var(
+                            usual_.var[a], options_.noise_sigma[a] * options_.noise_sigma[a]);
   }
   return v;
 }

@@ -271,20 +271,6 @@ constexpr FixErrorMixtureOptions kFixErrors{/*usual_sigma=*/{0.05, 0.01, 0.005},
                                             /*moved_sigma=*/{0.5, 0.3, 0.1},
                                             /*noise_sigma=*/{0.05, 0.01, 0.003},
                                             /*moved_prior=*/0.1};
-// A fix's own noise grows with its distance from IN in segment units (|IP -> IN| = 1): IN's
-// points are triangulated from IP and IN, so a view between them interpolates the reconstruction
-// and a view beyond IP extrapolates it (a robot placed behind IP at the start of a replay).
-// Measured (VGA, no disturbance, `evaluate --starts 5 --run 1|2 --seed 1 --trace DIR` in
-// gen_room_4, gen_building_3, gen_corridor_5, gen_building_6, robotics_room and white_corridor,
-// 11061 fixes of 252 segments; the fix's lateral position minus the true one, binned by the
-// fix's own distance: docs/method/navigator.md "A fix's noise and its distance from IN"): RMS
-// 0.8 cm within a quarter segment, 1.1 cm at a half to three quarters, 2.2 cm at 1 to 1.25, 4.2
-// cm at 1.5 to 1.75, 6.3 cm at 2.25 to 2.5 (one segment). The noise sigma scales by 1 + r^2,
-// about those ratios (measured 1.4, 2.75, 5.25, 7.9; modelled 1.4, 2.3, 3.6, 6.6 at the bins'
-// middles). Measured across; along and heading are scaled alike (one view's geometry), an
-// assumption.
-double fix_noise_sigma_scale(double r_units) { return 1.0 + r_units * r_units; }
-
 // The lines' heading has the fixes' two kinds of error (fix_error_mixture.hpp): every line yaw of
 // a segment is measured against IN's lines, and a moved shelf's boards are as horizontal as the
 // room's skirting. Taken as independent, a turned shelf's line yaws walked the heading to the
@@ -695,13 +681,9 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   // to itself, until every fix of it was within the gate (room_corridor_room, furniture, run 4).
   const double fix_weight =
       fix && prior ? std::pow(std::max(0.0, 1.0 - fix->prior_d2 / prior->gate_chi2), 2) : 1.0;
-  // The estimate weighs the fix by its own noise too (fix_noise_sigma_scale).
-  double fix_noise_scale = 1.0;
-  if (fix) {
-    tel.vnhv_fix_r_units = std::hypot(fix->pose.x_m, fix->pose.y_m);
-    tel.vnhv_fix_noise_sigma_scale = fix_noise_sigma_scale(tel.vnhv_fix_r_units);
-    fix_noise_scale = std::pow(tel.vnhv_fix_noise_sigma_scale, 2);
-  }
+  // How far the fix extrapolates IN's reconstruction (docs/method/navigator.md, "A fix's error
+  // and its distance from IN").
+  if (fix) tel.vnhv_fix_r_units = std::hypot(fix->pose.x_m, fix->pose.y_m);
   const control::PlanarPose& prev = vnhv_model_->prev_in_next;  // IN at the origin
   const bool arc = vnhv_curvature_1_m_ != 0.0;
   auto deviation_of = [&](const control::PlanarPose& pose) {
@@ -742,8 +724,7 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
         // Per axis of the robot, against the error this segment's fixes share.
         const OdometryPose y = between(*tracker_.estimate(), fix_teach);
         fix_correction_ = std::make_pair(std::hypot(y.x_m, y.y_m), std::abs(y.yaw_rad));
-        const Axes3 d = errors_.update(FixSource::kVnhv, {y.x_m, y.y_m, y.yaw_rad},
-                                       fix_weight / fix_noise_scale);
+        const Axes3 d = errors_.update(FixSource::kVnhv, {y.x_m, y.y_m, y.yaw_rad}, fix_weight);
         tracker_.shift(OdometryPose{d[0], d[1], d[2]});
         room_probability = errors_.model(FixSource::kVnhv).usual_probability();
         tel.vnhv_fix_room_probability = room_probability;
@@ -1273,9 +1254,7 @@ std::optional<control::PosePrior> Navigator::resection_prior(int in) const {
   // The estimate's sigmas are along and across the robot; IN's axes are turned by p.yaw_rad from
   // them (the small correlation this leaves out does not matter at a gate).
   const double c2 = std::pow(std::cos(p.yaw_rad), 2), s2 = 1.0 - c2;
-  // The next fix's noise, from where the estimate puts it (fix_noise_sigma_scale).
-  const double r_units = std::hypot(prior.pose.x_m, prior.pose.y_m);
-  const Axes3 var = fixes.expected_var(std::pow(fix_noise_sigma_scale(r_units), 2));
+  const Axes3 var = fixes.expected_var();
   const double var_along = var[0], var_lateral = var[1];
   prior.sigma_x = std::sqrt(c2 * var_along + s2 * var_lateral) / vnhv_m_per_unit_;
   prior.sigma_y = std::sqrt(s2 * var_along + c2 * var_lateral) / vnhv_m_per_unit_;

@@ -61,7 +61,6 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"vnhv_fix_d2", num(t.vnhv_fix_d2)},
       {"vnhv_fix_weight", num(t.vnhv_fix_weight)},
       {"vnhv_fix_r_units", num(t.vnhv_fix_r_units)},
-      {"vnhv_fix_noise_sigma_scale", num(t.vnhv_fix_noise_sigma_scale)},
       {"vnhv_fix_room_probability", num(t.vnhv_fix_room_probability)},
       {"odom_lateral_m", num(t.odom_lateral_m)},
       {"odom_heading_rad", num(t.odom_heading_rad)},

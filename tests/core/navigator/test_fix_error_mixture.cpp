@@ -192,27 +192,6 @@ TEST(FixErrorMixture, AnAxisNotModelledIsNaNAndRefusesMeasurements) {
   EXPECT_THROW(m.begin(none, {1.0, 1.0, 1.0}), std::invalid_argument);
 }
 
-TEST(FixErrorMixture, ANoisierFixWidensTheGateAndMovesTheEstimateLess) {
-  // A fix from a view beyond IP (navigator.cpp, fix_noise_sigma_scale) has a larger noise: its
-  // expectation is wider by the added noise variance, and the same innovation moves the
-  // estimate less when its weight divides the noise variance by the same factor.
-  const FixErrorMixtureOptions o = options();
-  FixErrorMixture m;
-  m.begin(o, {0.0004, 0.0004, 0.0001});
-  const Axes3 v1 = m.expected_var(), v9 = m.expected_var(9.0);
-  for (int a = 0; a < 3; ++a) EXPECT_NEAR(v9[a] - v1[a], 8.0 * std::pow(o.noise_sigma[a], 2), 1e-12);
-  FixErrorMixture noisy = m;
-  const Axes3 y{0.02, 0.02, 0.005};
-  const Axes3 d1 = m.update(y, 1.0), d9 = noisy.update(y, 1.0 / 9.0);
-  for (int a = 0; a < 3; ++a) {
-    EXPECT_GT(d1[a], 0.0);
-    EXPECT_GT(d9[a], 0.0);
-    EXPECT_LT(d9[a], d1[a]);
-  }
-  EXPECT_THROW(m.expected_var(0.5), std::invalid_argument);
-  EXPECT_THROW(m.expected_var(HUGE_VAL), std::invalid_argument);
-}
-
 TEST(FixErrorMixture, BadInputIsRefused) {
   FixErrorMixture m;
   const Axes3 var{0.01, 0.01, 0.01};

@@ -77,11 +77,9 @@ class FixErrorMixture {
   /// Where the room's next fix is expected (relative to the estimate) and that expectation's
   /// variance, per axis: the "usual" hypothesis's. This is the resection's prior, which picks
   /// the room among the structures in view (control::PosePrior); a moved object's structure is
-  /// what it must not pick, so its hypothesis does not widen the gate. `noise_scale` (>= 1)
-  /// multiplies the fix's own noise variance: the next fix's, where its geometry makes it
-  /// noisier (the weight of update() divides it alike).
+  /// what it must not pick, so its hypothesis does not widen the gate.
   Axes3 expected() const;
-  Axes3 expected_var(double noise_scale = 1.0) const;
+  Axes3 expected_var() const;
 
  private:
   struct Hypothesis {

@@ -99,8 +99,8 @@ struct Telemetry {
   /// its weight (1 at the prediction, 0 at the gate); NaN without a prediction.
   double vnhv_fix_d2 = kNaN, vnhv_fix_weight = kNaN;
   /// The fix's distance from IN in segment units (|IP -> IN| = 1; beyond 1 it extrapolates the
-  /// segment's reconstruction) and the factor its noise sigma takes from it; NaN without a fix.
-  double vnhv_fix_r_units = kNaN, vnhv_fix_noise_sigma_scale = kNaN;
+  /// segment's reconstruction); NaN without a fix.
+  double vnhv_fix_r_units = kNaN;
   /// After an accepted fix with odometry: the probability that the segment's fixes come from the
   /// room rather than from a moved object (navigator/fix_error_mixture.hpp). Below one half the
   /// fix neither corrects the VNHV filter nor counts as the robot located.
