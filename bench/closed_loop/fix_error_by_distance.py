@@ -19,9 +19,10 @@ Example:
 """
 import argparse
 import collections
-import json
 import math
 import sys
+
+from trace_progress import load  # the same trace reader (same directory)
 
 
 def is_number(v):
@@ -30,16 +31,10 @@ def is_number(v):
 
 def fixes(path):
     """(lateral error m, fix distance units, true distance units, segment id) per fix."""
-    with open(path) as f:
-        rows = [json.loads(line) for line in f if line.strip()]
-    if not rows or 'taught_key_images' not in rows[0]:
-        sys.exit(f'{path}: not an evaluate --trace file (no taught_key_images header)')
-    keys = [(k['x_m'], k['y_m']) for k in rows[0]['taught_key_images']]
+    keys, rows = load(path)
     out = []
-    for r in rows[1:]:
-        t, gt = r.get('telemetry'), r.get('gt')
-        if not t or not gt:
-            continue
+    for r in rows:
+        t, gt = r['telemetry'], r['gt']
         lat_fix, r_fix = t.get('vnhv_fix_lateral_m'), t.get('vnhv_fix_r_units')
         ip, nxt = t.get('ip'), t.get('in')
         if not is_number(lat_fix) or not is_number(r_fix) or ip is None or nxt != ip + 1:
