@@ -112,8 +112,12 @@ TEST(DeadReckoning, TelemetryShowsThePredictionTheFixesAreWeighedAgainst) {
   // (the prediction a fix is gated against), its sigmas, and the fix's distance and weight.
   const ClosedLoopRun run = closed_loop(NavigatorOptions{}, [](double) { return false; });
   int predicted = 0, weighed = 0;
+  double nearest_r = HUGE_VAL;
   for (size_t i = 0; i < run.steps.size(); ++i) {
     const Telemetry& t = run.steps[i].telemetry;
+    if (t.vnhv_structures == 0) {
+      EXPECT_TRUE(std::isnan(t.vnhv_fix_r_units)) << "frame " << i;
+    }
     if (!std::isfinite(t.odom_lateral_m)) continue;
     ++predicted;
     EXPECT_TRUE(std::isfinite(t.odom_heading_rad));
@@ -129,6 +133,9 @@ TEST(DeadReckoning, TelemetryShowsThePredictionTheFixesAreWeighedAgainst) {
       EXPECT_LE(t.vnhv_fix_weight, 1.0);
       // A refused fix still shows what it measured; an accepted one has a positive weight.
       EXPECT_TRUE(std::isfinite(t.vnhv_fix_lateral_m));
+      // Its distance from IN in segment lengths (the robot comes near every IN).
+      EXPECT_GE(t.vnhv_fix_r_units, 0.0);
+      nearest_r = std::min(nearest_r, t.vnhv_fix_r_units);
       if (!t.vnhv_fix_refused) {
         EXPECT_GT(t.vnhv_fix_weight, 0.0);
       }
@@ -136,6 +143,7 @@ TEST(DeadReckoning, TelemetryShowsThePredictionTheFixesAreWeighedAgainst) {
   }
   EXPECT_GT(predicted, 30);
   EXPECT_GT(weighed, 30);
+  EXPECT_LT(nearest_r, 0.5);
 }
 
 TEST(DeadReckoning, StopsAndSaysSoWhenVisionNeverComesBack) {
