@@ -63,11 +63,13 @@ struct Rig {
   cv::Point2d cam_in_base_m;
 };
 
-Rig make_rig(const sim::MockRobot& robot) {
+// `pitch_error_rad`: a canonical view computed for a head pitch that is off by this much (a
+// miscalibrated head), the rest of the geometry being right.
+Rig make_rig(const sim::MockRobot& robot, double pitch_error_rad = 0.0) {
   const sim::GroundTruth truth = robot.ground_truth();
   CeilingCamera camera;
   camera.intrinsics = robot.intrinsics(kWidthPx, kHeightPx);
-  camera.head_pitch_rad = kPitchRad;
+  camera.head_pitch_rad = kPitchRad + pitch_error_rad;
   camera.ceiling_above_cam_m = robot.world().ceiling_height_m - truth.T_world_cam.translation().z();
   Rig rig;
   rig.view = std::make_unique<CanonicalView>(camera, fit_frame(camera, kPxPerM, 3.5));
@@ -303,6 +305,195 @@ TEST(CeilingMosaicSim, TheChainedDriftOverTheTourIsBounded) {
       max_yaw * 180 / M_PI);
   EXPECT_LT(max_pos, 0.02 * t.tour.length_m);  // 2 % of the distance driven
   EXPECT_LT(max_yaw, 2.0 * M_PI / 180.0);
+}
+
+// The tour does not come back under ceiling it saw long before: loop closure (on by default)
+// finds nothing to close and the mosaic is the one built without it, landmark for landmark.
+TEST(CeilingMosaicSim, TheOpenTourIsBuiltAsWithoutLoopClosure) {
+  const Taught& t = taught();
+  EXPECT_TRUE(t.builder.loop_closures().empty());
+  MosaicBuilderOptions options;
+  options.px_per_m = t.rig.view->frame().px_per_m;
+  options.loop.enabled = false;
+  MosaicBuilder without(options);
+  for (const CeilingObservation& o : t.observations) without.add_frame(o);
+  const Mosaic m = without.mosaic();
+  ASSERT_EQ(m.landmarks.size(), t.mosaic.landmarks.size());
+  for (size_t i = 0; i < m.landmarks.size(); ++i) {
+    EXPECT_EQ(m.landmarks[i].id, t.mosaic.landmarks[i].id);
+    EXPECT_EQ(m.landmarks[i].position_m, t.mosaic.landmarks[i].position_m);
+    EXPECT_EQ(m.landmarks[i].observations, t.mosaic.landmarks[i].observations);
+  }
+  for (size_t k = 0; k < t.observations.size(); ++k) {
+    EXPECT_EQ(without.frames()[k].T_mosaic_base.x_m, t.builder.frames()[k].T_mosaic_base.x_m);
+    EXPECT_EQ(without.frames()[k].T_mosaic_base.y_m, t.builder.frames()[k].T_mosaic_base.y_m);
+  }
+}
+
+// A loop around the hall's centre (docs/method/ceiling.md, "Closing a loop"): 5.5 m, a left
+// turn of radius 1.2 m, 2.5 m, and so on round to the start (23.5 m), then 2 m more along the
+// first straight; the same rig and speed as the tour. Each frame is observed twice: through the
+// right canonical view, and through one computed for a head pitch 0.01 rad (0.57 deg) too low
+// (a miscalibrated head: the chain then drifts several centimetres over the loop). Each set is
+// built twice, with and without loop closure.
+constexpr double kLoopPitchErrorRad = 0.01;
+
+struct LoopTaught {
+  std::vector<sim::Pose2D> truth;
+  size_t back_at_start = 0;  // first frame back at the start
+  double length_m = 0.0;     // of the loop, to the start
+  PlanarPose T_world_mosaic;
+  std::vector<CeilingObservation> observations, miscalibrated;
+};
+
+const LoopTaught& loop_taught() {
+  static const LoopTaught* t = [] {
+    auto* out = new LoopTaught;
+    auto world = std::make_shared<const sim::World>(sim::load_world(world_file()));
+    sim::MockRobot robot(world);
+    robot.set_joint_angles({"HeadPitch"}, {kPitchRad});
+    const Rig rig = make_rig(robot), off = make_rig(robot, kLoopPitchErrorRad);
+    const double v = 0.25, r = 1.2;
+    struct Leg {
+      double omega_rad_s, duration_s;
+    };
+    const Leg straight_long{0.0, 5.5 / v}, straight_short{0.0, 2.5 / v};
+    const Leg turn{v / r, (M_PI / 2) * r / v}, overlap{0.0, 2.0 / v};
+    const Leg legs[] = {straight_long, turn,           straight_short, turn,   straight_long,
+                        turn,          straight_short, turn,           overlap};
+    const double dt = 1.0 / robot.options().frame_rate_hz;
+    sim::Pose2D prev = robot.ground_truth().base;
+    for (size_t leg = 0; leg < std::size(legs); ++leg) {
+      if (leg + 1 == std::size(legs)) out->back_at_start = out->truth.size();
+      for (double t_s = 0.0; t_s < legs[leg].duration_s; t_s += dt) {
+        robot.command_velocity({v, 0.0, legs[leg].omega_rad_s});
+        const Frame frame = robot.capture(kWidthPx, kHeightPx);
+        const sim::Pose2D now = robot.ground_truth().base;
+        if (out->truth.empty()) out->T_world_mosaic = to_planar(now);
+        if (leg + 1 < std::size(legs))
+          out->length_m += std::hypot(now.x_m - prev.x_m, now.y_m - prev.y_m);
+        prev = now;
+        out->truth.push_back(now);
+        out->observations.push_back(observe_image(rig, frame.gray));
+        out->miscalibrated.push_back(observe_image(off, frame.gray));
+      }
+    }
+    robot.stop_move();
+    return out;
+  }();
+  return *t;
+}
+
+struct LoopBuild {
+  MosaicBuilder builder;
+  Mosaic mosaic;
+  std::vector<double> closure_errors_m;  // landmarks within 2 m of the start (truth)
+  double max_jump_m = 0.0;               // largest error of a frame-to-frame motion
+  int lost = 0;
+};
+
+// `used`: the rig the observations came through; `rig`: the right one (for the truth).
+LoopBuild build_loop(const LoopTaught& t, const std::vector<CeilingObservation>& observations,
+                     const Rig& used, const Rig& rig, bool close_loops) {
+  MosaicBuilderOptions options;
+  options.px_per_m = rig.view->frame().px_per_m;
+  options.loop.enabled = close_loops;
+  LoopBuild b{MosaicBuilder(options), {}, {}, 0.0, 0};
+  for (const CeilingObservation& o : observations) b.builder.add_frame(o);
+  b.mosaic = b.builder.mosaic();
+  // Each kept landmark against where the true pose of its first sighting (its creation) puts
+  // that sighting, as in TheTourBuildsAMosaicWhoseLandmarksSitWhereTheCeilingIs.
+  const auto sightings = b.builder.kept_sightings();
+  std::map<int64_t, cv::Point2d> truth_of_id;
+  for (size_t k = 0; k < sightings.size(); ++k)
+    for (const LandmarkSighting& s : sightings[k])
+      if (!truth_of_id.count(s.id)) {
+        // Through the image: the canonical pixel of `used` is that image pixel's.
+        const cv::Point2d p_ceiling =
+            &used == &rig ? rig.view->ceiling_of_canonical(s.p_canon_px)
+                          : rig.view->ceiling_of_pixel(*used.view->to_image(s.p_canon_px)).value();
+        truth_of_id[s.id] = to_planar(t.truth[k]).apply(p_ceiling + rig.cam_in_base_m);
+      }
+  const cv::Point2d start(t.T_world_mosaic.x_m, t.T_world_mosaic.y_m);
+  for (const MosaicLandmark& l : b.mosaic.landmarks) {
+    const cv::Point2d truth = truth_of_id.at(l.id);
+    if (cv::norm(truth - start) < 2.0)
+      b.closure_errors_m.push_back(cv::norm(t.T_world_mosaic.apply(l.position_m) - truth));
+  }
+  const auto& frames = b.builder.frames();
+  for (size_t k = 0; k < frames.size(); ++k) {
+    b.lost += frames[k].localised ? 0 : 1;
+    if (k == 0 || !frames[k].localised || !frames[k - 1].localised) continue;
+    const PlanarPose d_est = frames[k - 1].T_mosaic_base.inverse() * frames[k].T_mosaic_base;
+    const PlanarPose d_true = to_planar(t.truth[k - 1]).inverse() * to_planar(t.truth[k]);
+    b.max_jump_m =
+        std::max(b.max_jump_m, std::hypot(d_est.x_m - d_true.x_m, d_est.y_m - d_true.y_m));
+  }
+  return b;
+}
+
+TEST(CeilingMosaicSim, ALoopAroundTheHallCloses) {
+  const LoopTaught& t = loop_taught();
+  const Rig rig = make_rig(*taught().robot), off = make_rig(*taught().robot, kLoopPitchErrorRad);
+  const size_t before = t.back_at_start - 90;  // 1.5 m before the start: no old landmark yet
+  auto report = [&](const char* name, const LoopBuild& b) {
+    const PlanarPose truth = t.T_world_mosaic.inverse() * to_planar(t.truth[before]);
+    const PlanarPose& est = b.builder.frames()[before].T_mosaic_base;
+    const double chained_m = std::hypot(est.x_m - truth.x_m, est.y_m - truth.y_m);
+    std::printf(
+        "[ loop ] %s: %zu frames, loop %.2f m, %d without a pose; landmarks within 2 m of the "
+        "start (%zu): median %.1f, p95 %.1f, max %.1f mm; chained pose 1.5 m before the start "
+        "%.1f mm (%.2f %%); largest frame-to-frame error %.1f mm; %zu closure(s)\n",
+        name, t.truth.size(), t.length_m, b.lost, b.closure_errors_m.size(),
+        1e3 * percentile(b.closure_errors_m, 0.5), 1e3 * percentile(b.closure_errors_m, 0.95),
+        1e3 * percentile(b.closure_errors_m, 1.0), 1e3 * chained_m, 100.0 * chained_m / t.length_m,
+        1e3 * b.max_jump_m, b.builder.loop_closures().size());
+    for (const LoopClosure& c : b.builder.loop_closures())
+      std::printf(
+          "[ loop ]   closure at frame %lld (%.2f m; loop from %.2f m): %d old landmarks "
+          "misplaced by %.1f mm, correction (%.1f, %.1f) mm %.2f deg\n",
+          static_cast<long long>(c.frame), c.to_travelled_m, c.from_travelled_m, c.old_inliers,
+          1e3 * c.error_before_m, 1e3 * c.T_corrected_chained.x_m, 1e3 * c.T_corrected_chained.y_m,
+          c.T_corrected_chained.theta_rad * 180 / M_PI);
+  };
+  const LoopBuild open = build_loop(t, t.observations, rig, rig, false);
+  const LoopBuild closed = build_loop(t, t.observations, rig, rig, true);
+  const LoopBuild off_open = build_loop(t, t.miscalibrated, off, rig, false);
+  const LoopBuild off_closed = build_loop(t, t.miscalibrated, off, rig, true);
+  report("right pitch, without closure", open);
+  report("right pitch, with closure   ", closed);
+  report("pitch off 0.01 rad, without closure", off_open);
+  report("pitch off 0.01 rad, with closure   ", off_closed);
+  for (const LoopBuild* b : {&open, &closed, &off_open, &off_closed}) {
+    EXPECT_EQ(b->lost, 0);
+    EXPECT_TRUE(b->mosaic.validate().empty());
+  }
+  EXPECT_TRUE(open.builder.loop_closures().empty());
+  EXPECT_TRUE(off_open.builder.loop_closures().empty());
+
+  // With the right pitch the chain arrives within the builder's RANSAC threshold: the start's
+  // landmarks agree with it and join its fits; nothing is corrected and the mosaic near the
+  // start is as good as without the feature.
+  EXPECT_TRUE(closed.builder.loop_closures().empty());
+  EXPECT_LT(percentile(closed.closure_errors_m, 1.0), 0.03);
+
+  // Miscalibrated, the chain arrives off by several centimetres (the premise) and without
+  // closure snaps onto the start's landmarks; with it, one correction as the start comes into
+  // view (the view reaches ~4 m ahead) puts the landmarks near the start where they belong.
+  ASSERT_GT(percentile(off_open.closure_errors_m, 1.0), 0.05);
+  const auto& closures = off_closed.builder.loop_closures();
+  ASSERT_FALSE(closures.empty());
+  EXPECT_LE(closures.size(), 2u);
+  EXPECT_GT(closures[0].frame, static_cast<int64_t>(t.back_at_start) - 5.0 / 0.25 * 15);
+  EXPECT_LE(closures[0].frame, static_cast<int64_t>(t.back_at_start));
+  EXPECT_LT(closures[0].from_travelled_m, 3.0);
+  // Bounds: docs/method/ceiling.md ("Closing a loop").
+  EXPECT_LT(percentile(off_closed.closure_errors_m, 1.0),
+            0.25 * percentile(off_open.closure_errors_m, 1.0));
+  EXPECT_LT(percentile(off_closed.closure_errors_m, 0.5),
+            0.2 * percentile(off_open.closure_errors_m, 0.5));
+  EXPECT_LT(percentile(off_closed.closure_errors_m, 0.95), 0.065);
+  EXPECT_LT(off_closed.max_jump_m, 0.5 * off_open.max_jump_m);
 }
 
 // Renders the robot placed at `pose` (world) and localises it without a prior. Two errors:

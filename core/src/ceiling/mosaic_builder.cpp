@@ -16,7 +16,50 @@ namespace {
 // Grid cells as large as the search radius: a query looks at the 3 x 3 cells around its point.
 int64_t pack(int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffffLL); }
 
+int64_t cell_of(const cv::Point2d& p_m, double cell_m) {
+  return pack(static_cast<int64_t>(std::floor(p_m.x / cell_m)),
+              static_cast<int64_t>(std::floor(p_m.y / cell_m)));
+}
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// SE(2) interpolation from the identity (alpha = 0) to C (alpha = 1) along the one-parameter
+// subgroup through C: C^alpha = exp(alpha log C), a screw motion about C's fixed point. With
+// V(theta) = [[s, -c], [c, s]] (s = sin(theta)/theta, c = (1 - cos(theta))/theta), the translation
+// of exp(theta, v) is V(theta) v.
+PlanarPose se2_power(const PlanarPose& C, double alpha) {
+  auto V = [](double theta_rad, double* s, double* c) {
+    if (std::abs(theta_rad) < 1e-9) {
+      *s = 1.0;
+      *c = 0.5 * theta_rad;
+    } else {
+      *s = std::sin(theta_rad) / theta_rad;
+      *c = (1.0 - std::cos(theta_rad)) / theta_rad;
+    }
+  };
+  const double theta = wrap_angle_rad(C.theta_rad);
+  double s = 1.0, c = 0.0;
+  V(theta, &s, &c);
+  const double det = s * s + c * c;  // > 0 for |theta| <= pi
+  const double vx = (s * C.x_m + c * C.y_m) / det, vy = (-c * C.x_m + s * C.y_m) / det;
+  V(alpha * theta, &s, &c);
+  return {alpha * (s * vx - c * vy), alpha * (c * vx + s * vy), alpha * theta};
+}
+
 }  // namespace
+
+void LoopClosureOptions::check() const {
+  if (!(std::isfinite(min_gap_m) && min_gap_m > 0.0))
+    throw std::invalid_argument("MosaicBuilder: loop.min_gap_m must be finite and > 0");
+  if (!(std::isfinite(search_radius_m) && search_radius_m > 0.0))
+    throw std::invalid_argument("MosaicBuilder: loop.search_radius_m must be finite and > 0");
+  if (min_inliers < 3) throw std::invalid_argument("MosaicBuilder: loop.min_inliers must be >= 3");
+  if (!(std::isfinite(min_error_m) && min_error_m >= 0.0))
+    throw std::invalid_argument("MosaicBuilder: loop.min_error_m must be finite and >= 0");
+}
 
 void MosaicBuilderOptions::check() const {
   if (!(std::isfinite(px_per_m) && px_per_m > 0.0))
@@ -36,6 +79,7 @@ void MosaicBuilderOptions::check() const {
   if (!(std::isfinite(landmark_step_rad) && landmark_step_rad >= 0.0))
     throw std::invalid_argument("MosaicBuilder: landmark_step_rad must be finite and >= 0");
   ransac.check();
+  loop.check();
 }
 
 MosaicBuilder::MosaicBuilder(MosaicBuilderOptions options) : options_(std::move(options)) {
@@ -43,9 +87,7 @@ MosaicBuilder::MosaicBuilder(MosaicBuilderOptions options) : options_(std::move(
 }
 
 int64_t MosaicBuilder::cell_key(const cv::Point2d& p_m) const {
-  const double cell = options_.search_radius_m;
-  return pack(static_cast<int64_t>(std::floor(p_m.x / cell)),
-              static_cast<int64_t>(std::floor(p_m.y / cell)));
+  return cell_of(p_m, options_.search_radius_m);
 }
 
 void MosaicBuilder::insert_in_grid(size_t index) {
@@ -82,8 +124,16 @@ void MosaicBuilder::add_landmark(const cv::Point2d& p_m, double orientation_rad,
   l.descriptor = descriptor.clone();
   l.observations = 1;
   l.last_seen_frame = frame;
+  l.created_travelled_m = travelled_m_;
+  l.last_seen_travelled_m = travelled_m_;
   landmarks_.push_back(std::move(l));
   insert_in_grid(landmarks_.size() - 1);
+}
+
+void MosaicBuilder::rebuild_grid() {
+  grid_.clear();
+  for (size_t k = 0; k < landmarks_.size(); ++k)
+    if (landmarks_[k].alive()) insert_in_grid(k);
 }
 
 void MosaicBuilder::prune(int64_t frame) {
@@ -129,38 +179,53 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
     return result;
   }
 
-  // Guided matching from the last good pose; each mosaic landmark keeps its closest observation.
-  std::vector<int> match_of_obs(n, -1);
-  std::unordered_map<size_t, std::pair<size_t, int>> best_obs_of_landmark;  // slot -> (obs, dist)
-  for (size_t i = 0; i < n; ++i) {
-    const cv::Point2d q = last_pose_.apply(obs.p_base_m[i]);
-    const uchar* d_i = obs.descriptors.ptr<uchar>(static_cast<int>(i));
-    int best = std::numeric_limits<int>::max();
-    size_t best_k = 0;
-    for (size_t k : near(q, options_.search_radius_m)) {
-      const int dist =
-          cv::hal::normHamming(d_i, landmarks_[k].descriptor.ptr<uchar>(), kMosaicDescriptorBytes);
-      if (dist < best) {
-        best = dist;
-        best_k = k;
+  // With loop closure, the landmarks not seen for loop.min_gap_m of travel ("old") are matched
+  // by close_loop only, which decides whether they agree with the recent chain.
+  const bool loop = options_.loop.enabled;
+  std::vector<Pair> pairs = guided_matches(obs, last_pose_, loop);
+  auto fit_pairs = [&](const std::vector<Pair>& ps) {
+    std::vector<cv::Point2d> src, dst;
+    for (const Pair& p : ps) {
+      src.push_back(obs.p_base_m[p.obs]);
+      dst.push_back(landmarks_[p.slot].position_m);
+    }
+    return ransac_rigid(src, dst, options_.ransac);
+  };
+  RigidFit fit = fit_pairs(pairs);
+  if (loop && !fit.found) {  // no recent chain to compare with: match as without the feature
+    pairs = guided_matches(obs, last_pose_, false);
+    fit = fit_pairs(pairs);
+  }
+  std::vector<uint8_t> claimed(n, 0);  // matched to an old landmark: not a new landmark
+  if (fit.found) {
+    const double travelled_m = travelled_m_ + std::hypot(fit.T_dst_src.x_m - last_pose_.x_m,
+                                                         fit.T_dst_src.y_m - last_pose_.y_m);
+    const LoopCheck check = loop ? close_loop(obs, fit.T_dst_src, frame, travelled_m) : LoopCheck{};
+    if (check.verdict == LoopVerdict::kCorrected) {
+      // The mosaic moved under the frame: match it again from its corrected pose, old included.
+      result.closed_loop = true;
+      pairs = guided_matches(obs, last_pose_, false);
+      fit = fit_pairs(pairs);
+    } else if (check.verdict == LoopVerdict::kAgree) {
+      // The old landmarks agree with the chain: they join the frame's fit.
+      std::vector<uint8_t> used(n, 0);
+      for (const Pair& p : pairs) used[p.obs] = 1;
+      std::vector<Pair> all = pairs;
+      for (size_t j = 0; j < check.old_pairs.size(); ++j)
+        if (check.inlier[j] && !used[check.old_pairs[j].obs]) all.push_back(check.old_pairs[j]);
+      RigidFit all_fit = fit_pairs(all);
+      if (all_fit.found) {
+        pairs = std::move(all);
+        fit = std::move(all_fit);
       }
     }
-    if (best > options_.max_hamming) continue;
-    auto it = best_obs_of_landmark.find(best_k);
-    if (it == best_obs_of_landmark.end() || best < it->second.second)
-      best_obs_of_landmark[best_k] = {i, best};
+    for (const Pair& p : check.old_pairs) claimed[p.obs] = 1;
+    travelled_m_ = travelled_m;
   }
-  std::vector<size_t> pair_obs, pair_slot;
-  std::vector<cv::Point2d> src, dst;
-  for (const auto& [k, od] : best_obs_of_landmark) {
-    pair_obs.push_back(od.first);
-    pair_slot.push_back(k);
-    src.push_back(obs.p_base_m[od.first]);
-    dst.push_back(landmarks_[k].position_m);
-    match_of_obs[od.first] = static_cast<int>(pair_obs.size()) - 1;
-  }
-  result.matches = static_cast<int>(src.size());
-  const RigidFit fit = ransac_rigid(src, dst, options_.ransac);
+  result.travelled_m = travelled_m_;
+  std::vector<int> match_of_obs(n, -1);
+  for (size_t p = 0; p < pairs.size(); ++p) match_of_obs[pairs[p].obs] = static_cast<int>(p);
+  result.matches = static_cast<int>(pairs.size());
   if (!fit.found) {
     frames_.push_back(result);
     prune(frame);
@@ -173,12 +238,13 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   last_pose_ = fit.T_dst_src;
 
   // Inlier sightings: one more consistent observation of an existing landmark (its pose stays).
-  for (size_t p = 0; p < pair_obs.size(); ++p) {
+  for (size_t p = 0; p < pairs.size(); ++p) {
     if (!fit.inlier[p]) continue;
-    const size_t i = pair_obs[p];
-    Landmark& l = landmarks_[pair_slot[p]];
+    const size_t i = pairs[p].obs;
+    Landmark& l = landmarks_[pairs[p].slot];
     ++l.observations;
     l.last_seen_frame = frame;
+    l.last_seen_travelled_m = travelled_m_;
     sighting(l.id, i);
   }
   // Unmatched observations become candidates, chained through this frame's pose; those matched
@@ -189,7 +255,7 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
                           options_.landmark_step_rad;
   if (create) creation_pose_ = last_pose_;
   for (size_t i = 0; i < n && create; ++i) {
-    if (match_of_obs[i] >= 0) continue;
+    if (match_of_obs[i] >= 0 || claimed[i]) continue;
     const cv::Point2d p_m = last_pose_.apply(obs.p_base_m[i]);
     if (options_.min_separation_m > 0.0 && !near(p_m, options_.min_separation_m).empty()) continue;
     add_landmark(p_m, last_pose_.theta_rad + obs.orientation_base_rad[i],
@@ -200,6 +266,166 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   frames_.push_back(result);
   prune(frame);
   return result;
+}
+
+// Guided matching from `prior`; each mosaic landmark keeps its closest observation.
+std::vector<MosaicBuilder::Pair> MosaicBuilder::guided_matches(const CeilingObservation& obs,
+                                                               const PlanarPose& prior,
+                                                               bool skip_old) const {
+  const size_t n = obs.size();
+  std::unordered_map<size_t, std::pair<size_t, int>> best_obs_of_landmark;  // slot -> (obs, dist)
+  for (size_t i = 0; i < n; ++i) {
+    const cv::Point2d q = prior.apply(obs.p_base_m[i]);
+    const uchar* d_i = obs.descriptors.ptr<uchar>(static_cast<int>(i));
+    int best = std::numeric_limits<int>::max();
+    size_t best_k = 0;
+    for (size_t k : near(q, options_.search_radius_m)) {
+      if (skip_old && old_landmark(landmarks_[k])) continue;
+      const int dist =
+          cv::hal::normHamming(d_i, landmarks_[k].descriptor.ptr<uchar>(), kMosaicDescriptorBytes);
+      if (dist < best) {
+        best = dist;
+        best_k = k;
+      }
+    }
+    if (best > options_.max_hamming) continue;
+    auto it = best_obs_of_landmark.find(best_k);
+    if (it == best_obs_of_landmark.end() || best < it->second.second)
+      best_obs_of_landmark[best_k] = {i, best};
+  }
+  std::vector<Pair> pairs;
+  for (const auto& [k, od] : best_obs_of_landmark) pairs.push_back({od.first, k});
+  return pairs;
+}
+
+// Old: kept, and not seen as an inlier for loop.min_gap_m of travel up to the last frame.
+bool MosaicBuilder::old_landmark(const Landmark& l) const {
+  return l.observations >= options_.min_observations &&
+         travelled_m_ - l.last_seen_travelled_m >= options_.loop.min_gap_m;
+}
+
+MosaicBuilder::LoopCheck MosaicBuilder::close_loop(const CeilingObservation& obs,
+                                                   const PlanarPose& T_mosaic_base, int64_t frame,
+                                                   double travelled_m) {
+  LoopCheck check;
+  const LoopClosureOptions& lo = options_.loop;
+  const size_t n = obs.size();
+  // 1. The old kept landmarks around the view, in a grid of search_radius_m cells (cheap when
+  // there are none: the cells the frame's landmarks fall in, grown by the search radius).
+  std::vector<cv::Point2d> q(n);
+  std::unordered_set<int64_t> cells;
+  for (size_t i = 0; i < n; ++i) {
+    q[i] = T_mosaic_base.apply(obs.p_base_m[i]);
+    cells.insert(cell_key(q[i]));
+  }
+  const int64_t reach =
+      static_cast<int64_t>(std::ceil(lo.search_radius_m / options_.search_radius_m));
+  std::unordered_set<int64_t> grown;
+  for (int64_t c : cells) {
+    const int64_t cx = c >> 32, cy = static_cast<int32_t>(c & 0xffffffffLL);
+    for (int64_t dx = -reach; dx <= reach; ++dx)
+      for (int64_t dy = -reach; dy <= reach; ++dy) grown.insert(pack(cx + dx, cy + dy));
+  }
+  std::unordered_map<int64_t, std::vector<size_t>> old_grid;  // search_radius_m cells
+  size_t n_old = 0;
+  for (int64_t c : grown) {
+    const auto it = grid_.find(c);
+    if (it == grid_.end()) continue;
+    for (size_t k : it->second) {
+      if (!landmarks_[k].alive() || !old_landmark(landmarks_[k])) continue;
+      old_grid[cell_of(landmarks_[k].position_m, lo.search_radius_m)].push_back(k);
+      ++n_old;
+    }
+  }
+  if (n_old == 0) return check;
+
+  // 2. Each frame landmark's nearest old descriptor within search_radius_m of where the chain
+  // puts it; each old landmark keeps its closest frame landmark.
+  std::unordered_map<size_t, std::pair<size_t, int>> best_obs_of_old;  // slot -> (obs, dist)
+  const double r2 = lo.search_radius_m * lo.search_radius_m;
+  for (size_t i = 0; i < n; ++i) {
+    const uchar* d_i = obs.descriptors.ptr<uchar>(static_cast<int>(i));
+    const int64_t cx = static_cast<int64_t>(std::floor(q[i].x / lo.search_radius_m));
+    const int64_t cy = static_cast<int64_t>(std::floor(q[i].y / lo.search_radius_m));
+    int best = std::numeric_limits<int>::max();
+    size_t best_k = 0;
+    for (int64_t dx = -1; dx <= 1; ++dx)
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const auto it = old_grid.find(pack(cx + dx, cy + dy));
+        if (it == old_grid.end()) continue;
+        for (size_t k : it->second) {
+          const cv::Point2d d = landmarks_[k].position_m - q[i];
+          if (d.x * d.x + d.y * d.y > r2) continue;
+          const int dist = cv::hal::normHamming(d_i, landmarks_[k].descriptor.ptr<uchar>(),
+                                                kMosaicDescriptorBytes);
+          if (dist < best) {
+            best = dist;
+            best_k = k;
+          }
+        }
+      }
+    if (best > options_.max_hamming) continue;
+    auto it = best_obs_of_old.find(best_k);
+    if (it == best_obs_of_old.end() || best < it->second.second)
+      best_obs_of_old[best_k] = {i, best};
+  }
+  std::vector<cv::Point2d> old_src, old_dst;
+  for (const auto& [k, od] : best_obs_of_old) {
+    check.old_pairs.push_back({od.first, k});
+    old_src.push_back(obs.p_base_m[od.first]);
+    old_dst.push_back(landmarks_[k].position_m);
+  }
+  if (check.old_pairs.size() < static_cast<size_t>(lo.min_inliers)) return check;
+  RigidRansacOptions old_ransac = options_.ransac;
+  old_ransac.min_inliers = lo.min_inliers;
+  const RigidFit old_fit = ransac_rigid(old_src, old_dst, old_ransac);
+  if (!old_fit.found) return check;
+
+  // 3. Against the frame's pose on the recent chain (T_mosaic_base: the old were left out).
+  std::vector<double> misplaced, created;
+  for (size_t j = 0; j < old_src.size(); ++j) {
+    if (!old_fit.inlier[j]) continue;
+    misplaced.push_back(cv::norm(T_mosaic_base.apply(old_src[j]) - old_dst[j]));
+    created.push_back(landmarks_[check.old_pairs[j].slot].created_travelled_m);
+  }
+  const double error_m = median(misplaced);
+  if (error_m <= lo.min_error_m) {
+    check.verdict = LoopVerdict::kAgree;
+    check.inlier = old_fit.inlier;
+    return check;
+  }
+
+  // 4. The correction, in full at this frame, interpolated back to the loop's start.
+  LoopClosure closure;
+  closure.frame = frame;
+  closure.from_travelled_m = median(created);
+  closure.to_travelled_m = travelled_m;
+  closure.T_corrected_chained = old_fit.T_dst_src * T_mosaic_base.inverse();
+  closure.old_inliers = old_fit.inliers;
+  closure.error_before_m = error_m;
+  const double span_m = std::max(travelled_m - closure.from_travelled_m, 1e-9);
+  auto correction = [&](double s_m) {
+    return se2_power(closure.T_corrected_chained,
+                     std::clamp((s_m - closure.from_travelled_m) / span_m, 0.0, 1.0));
+  };
+  for (Landmark& l : landmarks_) {
+    if (!l.alive() || l.created_travelled_m <= closure.from_travelled_m) continue;
+    const PlanarPose C = correction(l.created_travelled_m);
+    l.position_m = C.apply(l.position_m);
+    l.orientation_rad = wrap_angle_rad(l.orientation_rad + C.theta_rad);
+    ++closure.landmarks_moved;
+  }
+  for (MosaicFrameResult& f : frames_) {
+    if (!f.localised || f.travelled_m <= closure.from_travelled_m) continue;
+    f.T_mosaic_base = correction(f.travelled_m) * f.T_mosaic_base;
+    ++closure.frames_moved;
+  }
+  creation_pose_ = closure.T_corrected_chained * creation_pose_;
+  last_pose_ = closure.T_corrected_chained * T_mosaic_base;
+  rebuild_grid();
+  closures_.push_back(closure);
+  check.verdict = LoopVerdict::kCorrected;
+  return check;
 }
 
 Mosaic MosaicBuilder::mosaic() const {

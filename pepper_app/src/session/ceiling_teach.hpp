@@ -94,6 +94,10 @@ class CeilingTeacher {
 
   int64_t frames_seen() const { return static_cast<int64_t>(frames_.size()); }
   int64_t unlocalised_frames() const { return unlocalised_; }
+  /// The mosaic builder's loop closures so far (docs/method/ceiling.md "Closing a loop").
+  const std::vector<core::ceiling::LoopClosure>& loop_closures() const {
+    return builder_.loop_closures();
+  }
 
   /// Chooses the relay images and builds the map. Throws std::runtime_error when fewer than 2
   /// frames were taught or the mosaic kept no landmark.

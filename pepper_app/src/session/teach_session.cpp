@@ -351,6 +351,20 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
           link.publish_state({{"stop_reason", nullptr}});
         }
         ceiling_lost = !step.localised;
+        if (step.closed_loop && !ceiling_teacher->loop_closures().empty()) {
+          // The teach came back under ceiling it mapped long before: the chain was corrected.
+          const core::ceiling::LoopClosure& c = ceiling_teacher->loop_closures().back();
+          link.event({{"event", "ceiling_loop_closed"},
+                      {"frame", ceiling_teacher->frames_seen() - 1},
+                      {"old_landmarks", c.old_inliers},
+                      {"misplaced_m", c.error_before_m},
+                      {"from_travelled_m", c.from_travelled_m},
+                      {"to_travelled_m", c.to_travelled_m},
+                      {"correction_m", std::hypot(c.T_corrected_chained.x_m,
+                                                  c.T_corrected_chained.y_m)},
+                      {"correction_rad", c.T_corrected_chained.theta_rad},
+                      {"landmarks_moved", c.landmarks_moved}});
+        }
         nlohmann::json sample = drive_sample();
         sample["ceiling_inliers"] = step.inliers;
         sample["ceiling_added"] = step.added;
@@ -414,7 +428,11 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         if (teacher) p.key_index = teacher->key_image_count() - 1;
         if (ceiling_teacher) {
           p.detail = "ceiling mosaic, " + std::to_string(ceiling_teacher->unlocalised_frames()) +
-                     " frames without a pose" + (ceiling_lost ? ", CEILING LOST" : "");
+                     " frames without a pose" + (ceiling_lost ? ", CEILING LOST" : "") +
+                     (ceiling_teacher->loop_closures().empty()
+                          ? ""
+                          : ", loops closed " +
+                                std::to_string(ceiling_teacher->loop_closures().size()));
         }
         if (!recording) p.detail = "not recording";
         link.progress(p);

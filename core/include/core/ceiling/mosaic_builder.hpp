@@ -29,6 +29,23 @@
 // loses the ceiling while the base moves farther than search_radius_m stays lost (every later
 // frame reports localised = false); the teach session warns (a ceiling_lost event, the UI status,
 // map info's warning) and does not recover.
+//
+// Loop closure (docs/method/ceiling.md, "Closing a loop"): a teach that comes back under ceiling
+// it mapped long before re-observes *old* landmarks (kept, and not seen as an inlier for
+// `loop.min_gap_m` of chained travel) that the chain's drift has misplaced. So that the chain
+// does not silently absorb them, old landmarks are left out of the guided matching and matched
+// apart (within `loop.search_radius_m` of where the frame's pose puts each frame landmark). When
+// at least `loop.min_inliers` of them agree on a pose T_old (RANSAC):
+// - if the recent chain's pose T_recent misplaces them by at most `loop.min_error_m` (median),
+//   they simply join the frame's fit;
+// - otherwise the correction C = T_old T_recent^-1 is spread over what was created since the
+//   loop's start (the old inliers' median creation distance s0): each landmark and each recorded
+//   frame pose created at chained distance s moves by C^a, the SE(2) interpolation of C (a screw
+//   motion) with a = (s - s0) / (s_now - s0); the frame is then matched again from its corrected
+//   pose, the old landmarks included.
+// Frame landmarks matched to old landmarks never become new landmarks, so a loop adds no
+// duplicates. A tour that never re-observes old landmarks is built exactly as without the feature
+// (loop.enabled = false).
 // Errors: bad options throw std::invalid_argument naming the field. Not thread-safe (one teach).
 
 #include <cstdint>
@@ -43,6 +60,29 @@
 
 namespace pepper::core::ceiling {
 
+/// Loop closure (see the header's comment). Defaults: docs/method/ceiling.md, "Closing a loop".
+struct LoopClosureOptions {
+  bool enabled = true;
+  /// A kept landmark is *old* once the chain has travelled this far since its last inlier
+  /// sighting (a landmark stays in the ceiling view for up to ~3.4 m of forward travel), > 0.
+  double min_gap_m = 5.0;
+  /// Old landmarks are searched this far from where the frame's pose puts each frame landmark:
+  /// the largest chain drift a closure can correct, > 0.
+  double search_radius_m = 1.0;
+  /// Old landmarks agreeing on one pose (RANSAC with the builder's threshold) to close, >= 3.
+  /// They come into view as a band at the far edge; with 15 the band's rotation was too loose
+  /// on renders (corrections of up to 2 deg, one after the other).
+  int min_inliers = 30;
+  /// Correct only when the recent chain misplaces the old inliers by more than this (median),
+  /// >= 0. The default is the builder's RANSAC threshold: below it the old landmarks would be
+  /// inliers of the ordinary fit anyway; on renders they are misplaced by 10-20 mm with no
+  /// drift to correct, and correcting on that noise made things worse.
+  double min_error_m = 0.03;
+
+  /// Throws std::invalid_argument naming the first invalid field (as "loop.<field>").
+  void check() const;
+};
+
 struct MosaicBuilderOptions {
   double px_per_m = 80.0;            ///< the canonical view's scale, recorded in the mosaic, > 0
   double search_radius_m = 0.4;      ///< motion between two frames plus prediction error, > 0
@@ -53,6 +93,7 @@ struct MosaicBuilderOptions {
   double landmark_step_m = 0.1;      ///< new landmarks only once the base moved this far, >= 0
   double landmark_step_rad = 0.05;   ///< ... or turned this much since the last ones, >= 0
   RigidRansacOptions ransac{0.03, 10, 300, 1};
+  LoopClosureOptions loop;
 
   /// Throws std::invalid_argument naming the first invalid field.
   void check() const;
@@ -74,6 +115,20 @@ struct MosaicFrameResult {
   double rms_m = 0.0;                       ///< inliers' residual
   int added = 0;                            ///< new candidates
   std::vector<LandmarkSighting> sightings;  ///< inlier (and new) landmarks of this frame
+  double travelled_m = 0.0;  ///< chained path length from the first frame (as when added)
+  bool closed_loop = false;  ///< this frame closed a loop (MosaicBuilder::loop_closures())
+};
+
+/// One loop closure: what was corrected.
+struct LoopClosure {
+  int64_t frame = -1;              ///< the frame that closed the loop
+  double from_travelled_m = 0.0;   ///< the loop's start: the old inliers' median creation
+  double to_travelled_m = 0.0;     ///< the closing frame's chained distance
+  PlanarPose T_corrected_chained;  ///< the correction C at the closing frame (mosaic frame)
+  int old_inliers = 0;             ///< old landmarks that agreed on the frame's pose
+  double error_before_m = 0.0;     ///< median misplacement of those by the recent chain
+  int landmarks_moved = 0;
+  int frames_moved = 0;
 };
 
 class MosaicBuilder {
@@ -89,18 +144,27 @@ class MosaicBuilder {
   /// selector's input, relay_images.hpp).
   std::vector<std::vector<LandmarkSighting>> kept_sightings() const;
   /// Per frame so far, the base pose (nullopt-like: localised = false where none was found).
+  /// Poses recorded before a loop closure are the corrected ones.
   const std::vector<MosaicFrameResult>& frames() const { return frames_; }
   size_t candidates() const;
+  /// The loop closures so far, in order.
+  const std::vector<LoopClosure>& loop_closures() const { return closures_; }
 
  private:
   struct Landmark {
     int64_t id = -1;
-    cv::Point2d position_m;  // fixed at creation (the paper: the mosaic is rigid)
+    cv::Point2d position_m;  // fixed at creation (the paper: the mosaic is rigid) but for loops
     double orientation_rad = 0.0;
     cv::Mat descriptor;
     int observations = 0;
     int64_t last_seen_frame = -1;
+    double created_travelled_m = 0.0;    // the chain's travelled distance at creation
+    double last_seen_travelled_m = 0.0;  // ... at the last inlier sighting
     bool alive() const { return observations > 0; }
+  };
+  struct Pair {  // a frame landmark matched to a mosaic landmark slot
+    size_t obs = 0;
+    size_t slot = 0;
   };
   int64_t cell_key(const cv::Point2d& p_m) const;
   void insert_in_grid(size_t index);
@@ -108,6 +172,23 @@ class MosaicBuilder {
   void add_landmark(const cv::Point2d& p_m, double orientation_rad, const cv::Mat& descriptor,
                     int64_t frame);
   void prune(int64_t frame);
+  void rebuild_grid();
+  // Guided matching from `prior`; with `skip_old`, old landmarks (old_landmark) are left to
+  // close_loop.
+  std::vector<Pair> guided_matches(const CeilingObservation& obs, const PlanarPose& prior,
+                                   bool skip_old) const;
+  bool old_landmark(const Landmark& l) const;
+  enum class LoopVerdict { kNone, kAgree, kCorrected };
+  struct LoopCheck {
+    LoopVerdict verdict = LoopVerdict::kNone;
+    std::vector<Pair> old_pairs;  // frame landmarks matched to old landmarks
+    std::vector<uint8_t> inlier;  // per old pair (kAgree)
+  };
+  // Matches the old landmarks around the view and compares them with the frame's pose on the
+  // recent chain (see the header's comment); kCorrected: the mosaic and the recorded poses were
+  // corrected, last_pose_ is the frame's corrected pose.
+  LoopCheck close_loop(const CeilingObservation& obs, const PlanarPose& T_mosaic_base,
+                       int64_t frame, double travelled_m);
 
   MosaicBuilderOptions options_;
   std::vector<Landmark> landmarks_;  // dropped candidates stay with observations = 0
@@ -116,6 +197,9 @@ class MosaicBuilder {
   std::vector<MosaicFrameResult> frames_;
   PlanarPose last_pose_;
   PlanarPose creation_pose_;  // pose of the last frame that added landmarks
+  double travelled_m_ = 0.0;  // chained path length up to the last localised frame (the "now"
+                              // of old_landmark while a frame is added)
+  std::vector<LoopClosure> closures_;
 };
 
 }  // namespace pepper::core::ceiling
