@@ -267,7 +267,8 @@ MapSummary summary_from_manifest(const Manifest& m) {
 
 }  // namespace
 
-void save_map(const VisualMemory& map, const fs::path& dir_in) {
+void save_map(const VisualMemory& map, const fs::path& dir_in,
+              const std::function<void(const fs::path& tmp_dir)>& write_extra) {
   const fs::path dir = fs::absolute(dir_in).lexically_normal();
   if (map.key_images.size() < 2) {
     throw MapError(Kind::kInvalidMap, dir, dir.string() + ": a map needs at least 2 key images");
@@ -366,6 +367,7 @@ void save_map(const VisualMemory& map, const fs::path& dir_in) {
     const std::string text = manifest.dump(2) + "\n";
     write_file_synced(tmp / kManifestName, reinterpret_cast<const uint8_t*>(text.data()),
                       text.size());
+    if (write_extra) write_extra(tmp);
     fsync_dir(tmp);
     fs::path old;
     if (fs::exists(dir, ec)) {

@@ -25,9 +25,12 @@ void save_ceiling_map(const CeilingMap& map, const fs::path& dir) {
     throw cc::MosaicError(dir / kMosaicFileName, "invalid mosaic, not saved: " + e.front());
   if (const auto e = map.tour.validate(); !e.empty())
     throw cc::CeilingTourError(dir / kCeilingTourFileName, "invalid tour, not saved: " + e.front());
-  core::memory::save_map(map.map, dir);
-  cc::save_mosaic(map.mosaic, dir / kMosaicFileName);
-  cc::save_ceiling_tour(map.tour, dir / kCeilingTourFileName);
+  // The mosaic and the tour go into the map's temporary folder: the three parts replace the
+  // previous map together (a crash leaves the old map or the new one, never a mix).
+  core::memory::save_map(map.map, dir, [&](const fs::path& tmp) {
+    cc::save_mosaic(map.mosaic, tmp / kMosaicFileName);
+    cc::save_ceiling_tour(map.tour, tmp / kCeilingTourFileName);
+  });
 }
 
 CeilingParts load_ceiling_parts(const fs::path& dir, const core::memory::MapSummary& summary) {

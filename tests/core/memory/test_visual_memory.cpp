@@ -361,6 +361,35 @@ TEST_F(VisualMemoryTest, InterruptedSaveNeverLeavesALoadableHalfMap) {
   EXPECT_EQ(siblings, 1);
 }
 
+// A mode's own files (the ceiling mosaic and tour) are written by save_map's hook into the
+// temporary folder: they replace the previous map's together with its key images, or, when the
+// hook fails, nothing is replaced and no temporary folder is left.
+TEST_F(VisualMemoryTest, ExtraFilesReplaceTheMapTogetherOrNotAtAll) {
+  auto write_text = [&](const fs::path& p, const std::string& text) {
+    write(p, std::vector<char>(text.begin(), text.end()));
+  };
+  save_map(synthetic_map(4), dir_, [&](const fs::path& tmp) {
+    EXPECT_NE(tmp, dir_);
+    EXPECT_TRUE(fs::exists(tmp / "manifest.json"));  // the hook runs once the map is written
+    write_text(tmp / "extra.txt", "first");
+  });
+  EXPECT_EQ(load_map(dir_).key_images.size(), 4u);
+  ASSERT_TRUE(fs::exists(dir_ / "extra.txt"));
+  EXPECT_EQ(read(dir_ / "extra.txt"), std::vector<char>({'f', 'i', 'r', 's', 't'}));
+
+  EXPECT_THROW(save_map(synthetic_map(5), dir_,
+                        [&](const fs::path& tmp) {
+                          write_text(tmp / "extra.txt", "second");
+                          throw std::runtime_error("disk full");
+                        }),
+               std::runtime_error);
+  EXPECT_EQ(load_map(dir_).key_images.size(), 4u);  // the previous map, whole
+  EXPECT_EQ(read(dir_ / "extra.txt"), std::vector<char>({'f', 'i', 'r', 's', 't'}));
+  int entries = 0;
+  for (const auto& e : fs::directory_iterator(root_)) entries += e.path() != dir_ ? 1 : 0;
+  EXPECT_EQ(entries, 0) << "a temporary folder was left beside the map";
+}
+
 // The distance driven during teach: kept to the bit when the map has it, NaN when it has not
 // (maps saved before the field, plain image folders); a manifest that breaks its rules (some key
 // images without it, a decrease) is malformed even with its CRC patched to agree.

@@ -29,6 +29,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -93,7 +94,12 @@ class MapError : public std::runtime_error {
 const char* to_string(MapError::Kind kind);
 
 /// Writes `map` atomically to folder `dir` (replacing an existing map there). Throws MapError.
-void save_map(const VisualMemory& map, const std::filesystem::path& dir);
+/// `write_extra`, when given, writes the mode's own files (the ceiling mosaic and tour) into the
+/// temporary folder it is passed, before that folder is renamed into place: all of the map's files
+/// replace the previous map together or not at all. What it throws is rethrown, the previous map
+/// untouched and the temporary folder removed.
+void save_map(const VisualMemory& map, const std::filesystem::path& dir,
+              const std::function<void(const std::filesystem::path& tmp_dir)>& write_extra = {});
 
 struct LoadOptions {
   /// When set, the map's camera must equal this one scaled to the map's image size (relative
