@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/hal/hal.hpp>
 #include <stdexcept>
+#include <string>
 #include <unordered_set>
 
 namespace pepper::core::ceiling {
@@ -61,6 +62,17 @@ void LoopClosureOptions::check() const {
     throw std::invalid_argument("MosaicBuilder: loop.min_error_m must be finite and >= 0");
 }
 
+void RelocalisationOptions::check() const {
+  if (every_frames < 1)
+    throw std::invalid_argument("MosaicBuilder: relocalisation.every_frames must be >= 1");
+  try {
+    localiser.check();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("MosaicBuilder: relocalisation.localiser: ") +
+                                e.what());
+  }
+}
+
 void MosaicBuilderOptions::check() const {
   if (!(std::isfinite(px_per_m) && px_per_m > 0.0))
     throw std::invalid_argument("MosaicBuilder: px_per_m must be finite and > 0");
@@ -80,6 +92,7 @@ void MosaicBuilderOptions::check() const {
     throw std::invalid_argument("MosaicBuilder: landmark_step_rad must be finite and >= 0");
   ransac.check();
   loop.check();
+  relocalisation.check();
 }
 
 MosaicBuilder::MosaicBuilder(MosaicBuilderOptions options) : options_(std::move(options)) {
@@ -182,7 +195,6 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   // With loop closure, the landmarks not seen for loop.min_gap_m of travel ("old") are matched
   // by close_loop only, which decides whether they agree with the recent chain.
   const bool loop = options_.loop.enabled;
-  std::vector<Pair> pairs = guided_matches(obs, last_pose_, loop);
   auto fit_pairs = [&](const std::vector<Pair>& ps) {
     std::vector<cv::Point2d> src, dst;
     for (const Pair& p : ps) {
@@ -191,15 +203,49 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
     }
     return ransac_rigid(src, dst, options_.ransac);
   };
-  RigidFit fit = fit_pairs(pairs);
-  if (loop && !fit.found) {  // no recent chain to compare with: match as without the feature
-    pairs = guided_matches(obs, last_pose_, false);
+  std::vector<Pair> pairs;
+  RigidFit fit;
+  auto match_from = [&](const PlanarPose& prior) {
+    pairs = guided_matches(obs, prior, loop);
     fit = fit_pairs(pairs);
+    if (loop && !fit.found) {  // no recent chain to compare with: match as without the feature
+      pairs = guided_matches(obs, prior, false);
+      fit = fit_pairs(pairs);
+    }
+  };
+  match_from(last_pose_);
+  if (!fit.found) {
+    // Lost: a search without a prior may give the frame a prior the guided matching can use.
+    if (const std::optional<PlanarPose> T_fix = relocalise(obs, false)) {
+      match_from(*T_fix);
+      result.relocalised = fit.found;
+    }
+  } else if (lost_frames_ > 0) {
+    // Posed again by the guided matching after a loss: from a last good pose that may be far
+    // behind, a repeated ceiling (tiles) can lock it onto the wrong place. Checked once against
+    // a search without a prior: where the two disagree, the prior whose fit explains more of the
+    // view wins.
+    if (const std::optional<PlanarPose> T_fix = relocalise(obs, true)) {
+      double apart_m = 0.0;  // how far apart the two poses put the frame's landmarks
+      for (const cv::Point2d& p : obs.p_base_m)
+        apart_m = std::max(apart_m, cv::norm(fit.T_dst_src.apply(p) - T_fix->apply(p)));
+      if (apart_m > options_.ransac.inlier_threshold_m) {
+        std::vector<Pair> guided_pairs = std::move(pairs);
+        RigidFit guided_fit = std::move(fit);
+        match_from(*T_fix);
+        result.relocalised = fit.found && fit.inliers > guided_fit.inliers;
+        if (!result.relocalised) {
+          pairs = std::move(guided_pairs);
+          fit = std::move(guided_fit);
+        }
+      }
+    }
   }
   std::vector<uint8_t> claimed(n, 0);  // matched to an old landmark: not a new landmark
+  double step_m = 0.0;  // from the last good pose (after a loss: the straight line across it)
   if (fit.found) {
-    const double travelled_m = travelled_m_ + std::hypot(fit.T_dst_src.x_m - last_pose_.x_m,
-                                                         fit.T_dst_src.y_m - last_pose_.y_m);
+    step_m = std::hypot(fit.T_dst_src.x_m - last_pose_.x_m, fit.T_dst_src.y_m - last_pose_.y_m);
+    const double travelled_m = travelled_m_ + step_m;
     const LoopCheck check = loop ? close_loop(obs, fit.T_dst_src, frame, travelled_m) : LoopCheck{};
     if (check.verdict == LoopVerdict::kCorrected) {
       // The mosaic moved under the frame: match it again from its corrected pose, old included.
@@ -227,6 +273,7 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   for (size_t p = 0; p < pairs.size(); ++p) match_of_obs[pairs[p].obs] = static_cast<int>(p);
   result.matches = static_cast<int>(pairs.size());
   if (!fit.found) {
+    ++lost_frames_;
     frames_.push_back(result);
     prune(frame);
     return result;
@@ -235,7 +282,20 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   result.T_mosaic_base = fit.T_dst_src;
   result.inliers = fit.inliers;
   result.rms_m = fit.rms_m;
+  if (result.relocalised) {
+    Relocalisation r;
+    r.frame = frame;
+    r.last_good_frame = last_good_frame_;
+    r.attempts = loss_attempts_;
+    r.inliers = fit.inliers;
+    r.gap_m = step_m;
+    relocalisations_.push_back(r);
+  }
   last_pose_ = fit.T_dst_src;
+  last_good_frame_ = frame;
+  lost_frames_ = 0;
+  loss_attempts_ = 0;
+  lost_localiser_.reset();
 
   // Inlier sightings: one more consistent observation of an existing landmark (its pose stays).
   for (size_t p = 0; p < pairs.size(); ++p) {
@@ -266,6 +326,24 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   frames_.push_back(result);
   prune(frame);
   return result;
+}
+
+// A search without a prior after a loss (see the header's comment): on a lost frame, due on the
+// first one and then every relocalisation.every_frames lost frames; `always` for the check of
+// the first frame posed again.
+std::optional<PlanarPose> MosaicBuilder::relocalise(const CeilingObservation& obs, bool always) {
+  const RelocalisationOptions& ro = options_.relocalisation;
+  if (!ro.enabled || (!always && lost_frames_ % ro.every_frames != 0)) return std::nullopt;
+  if (!lost_localiser_) {
+    Mosaic kept = mosaic();
+    if (kept.landmarks.empty()) return std::nullopt;
+    lost_localiser_.emplace(std::move(kept), ro.localiser);
+  }
+  ++loss_attempts_;
+  ++relocalisation_attempts_;
+  const MosaicFix fix = lost_localiser_->localise(obs);
+  if (!fix.found) return std::nullopt;
+  return fix.T_mosaic_base;
 }
 
 // Guided matching from `prior`; each mosaic landmark keeps its closest observation.

@@ -128,6 +128,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     return teacher ? teacher->frames_seen() : 0;
   };
   bool ceiling_lost = false;  // the builder found no pose for the last frame
+  int64_t ceiling_lost_frames = 0;  // ... and for this many frames in a row
+  int ceiling_relocalisations = 0;  // losses the builder recovered from by re-localising
   TeachFeedbackLimits feedback_limits;
   TeachFeedback feedback;
   nlohmann::json feedback_sent = to_json(feedback);
@@ -335,8 +337,17 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         const core::ceiling::MosaicFrameResult step =
             ceiling_teacher->add_frame(*frame, travelled_m);
         if (pos) result.path_m.push_back(*pos);
-        // The builder does not re-localise (mosaic_builder.hpp): say so when the ceiling is lost,
-        // once per loss, so that the operator can drive back while the teach is still running.
+        // Say so when the ceiling is lost, once per loss, so that the operator can drive back
+        // while the teach is still running (the builder re-localises when it sees mapped
+        // ceiling again, mosaic_builder.hpp).
+        if (step.relocalised) {
+          ++ceiling_relocalisations;
+          link.event({{"event", "ceiling_relocalised"},
+                      {"frame", ceiling_teacher->frames_seen() - 1},
+                      {"inliers", step.inliers},
+                      {"frames_lost", ceiling_lost_frames}});
+        }
+        ceiling_lost_frames = step.localised ? 0 : ceiling_lost_frames + 1;
         if (!step.localised && !ceiling_lost) {
           link.event({{"event", "ceiling_lost"},
                       {"frame", ceiling_teacher->frames_seen() - 1},
@@ -344,8 +355,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                       {"inliers", step.inliers}});
           if (link.has_ui()) {
             link.publish_state({{"stop_reason",
-                                 "ceiling lost: no pose in the mosaic; drive back to where the "
-                                 "ceiling was last seen"}});
+                                 "ceiling lost: no pose in the mosaic; drive back under "
+                                 "ceiling already taught"}});
           }
         } else if (step.localised && ceiling_lost && link.has_ui()) {
           link.publish_state({{"stop_reason", nullptr}});
@@ -427,12 +438,15 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         p.distance_m = result.distance_m;
         if (teacher) p.key_index = teacher->key_image_count() - 1;
         if (ceiling_teacher) {
-          p.detail = "ceiling mosaic, " + std::to_string(ceiling_teacher->unlocalised_frames()) +
-                     " frames without a pose" + (ceiling_lost ? ", CEILING LOST" : "") +
-                     (ceiling_teacher->loop_closures().empty()
-                          ? ""
-                          : ", loops closed " +
-                                std::to_string(ceiling_teacher->loop_closures().size()));
+          p.detail =
+              "ceiling mosaic, " + std::to_string(ceiling_teacher->unlocalised_frames()) +
+              " frames without a pose" + (ceiling_lost ? ", CEILING LOST" : "") +
+              (ceiling_relocalisations == 0
+                   ? ""
+                   : ", re-localised " + std::to_string(ceiling_relocalisations)) +
+              (ceiling_teacher->loop_closures().empty()
+                   ? ""
+                   : ", loops closed " + std::to_string(ceiling_teacher->loop_closures().size()));
         }
         if (!recording) p.detail = "not recording";
         link.progress(p);

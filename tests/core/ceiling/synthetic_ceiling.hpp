@@ -1,7 +1,8 @@
 #pragma once
 // Test support for the ceiling tests that run without rendering (mosaic builder, localiser,
 // ceiling navigator): a ceiling of points on a jittered 0.1 m grid, each with a random ORB-like
-// descriptor, and what a base at a known pose sees of it.
+// descriptor, what a base at a known pose sees of it, a loop to drive under it, and the
+// observation errors that make a chained mosaic drift.
 
 #include <cmath>
 #include <cstdint>
@@ -68,5 +69,77 @@ inline CeilingObservation see_synthetic(const SyntheticCeiling& c, const PlanarP
   if (!rows.empty()) cv::vconcat(rows, o.descriptors);
   return o;
 }
+
+/// A tour of the synthetic ceiling: the true base pose T_world_base per frame.
+struct SyntheticPath {
+  std::vector<PlanarPose> truth;
+  size_t back_at_start = 0;  ///< first frame back at the start (loops)
+};
+
+/// A rounded rectangle driven counter-clockwise from (0, 0) heading +x, `step_m` per frame:
+/// straights of 4 m and 2 m, 90 degree left turns of radius 1 m (18.3 m), back at the start,
+/// then `overlap_m` more along the first straight: the loop's end sees its beginning again.
+inline SyntheticPath rounded_rectangle(double overlap_m, double step_m) {
+  SyntheticPath path;
+  PlanarPose p{0.0, 0.0, 0.0};
+  path.truth.push_back(p);
+  auto straight = [&](double length_m) {
+    const int n = static_cast<int>(std::lround(length_m / step_m));
+    for (int i = 0; i < n; ++i) path.truth.push_back(p = p * PlanarPose{length_m / n, 0.0, 0.0});
+  };
+  auto turn = [&]() {
+    constexpr double kRadiusM = 1.0;
+    const int n = static_cast<int>(std::lround(0.5 * M_PI * kRadiusM / step_m));
+    const double dth = 0.5 * M_PI / n, chord = 2.0 * kRadiusM * std::sin(0.5 * dth);
+    for (int i = 0; i < n; ++i)
+      path.truth.push_back(
+          p = p * PlanarPose{chord * std::cos(0.5 * dth), chord * std::sin(0.5 * dth), dth});
+  };
+  for (int side = 0; side < 2; ++side) {
+    straight(4.0);
+    turn();
+    straight(2.0);
+    turn();
+  }
+  path.back_at_start = path.truth.size() - 1;
+  straight(overlap_m);
+  return path;
+}
+
+/// The errors that make a chained mosaic drift (test_mosaic_loop_closure.cpp's header):
+/// Gaussian noise per axis on every landmark position, a fraction of the descriptor bits flipped
+/// per sighting, and a forward stretch growing across the view, x' = x (1 + k (x - 0.8 m)).
+struct ChainErrors {
+  double noise_m = 0.003;
+  double flip = 0.1;
+  double stretch_1_m = 0.01;
+};
+
+/// Applies ChainErrors to successive observations, drawing from `rng` (one noise distribution for
+/// the whole teach, so that a teach is one deterministic sequence).
+class ChainErrorInjector {
+ public:
+  ChainErrorInjector(const ChainErrors& e, std::mt19937& rng)
+      : e_(e), rng_(rng), noise_(0.0, e.noise_m) {}
+
+  void apply(CeilingObservation& o) {
+    const uint32_t flip_below = static_cast<uint32_t>(e_.flip * 4294967295.0);
+    for (cv::Point2d& p : o.p_base_m) {
+      p.x *= 1.0 + e_.stretch_1_m * (p.x - 0.8);
+      if (e_.noise_m > 0.0) p += cv::Point2d(noise_(rng_), noise_(rng_));
+    }
+    o.descriptors = o.descriptors.clone();
+    for (int r = 0; e_.flip > 0.0 && r < o.descriptors.rows; ++r)
+      for (int b = 0; b < kMosaicDescriptorBytes; ++b)
+        for (int bit = 0; bit < 8; ++bit)
+          if (rng_() < flip_below)
+            o.descriptors.at<uint8_t>(r, b) ^= static_cast<uint8_t>(1u << bit);
+  }
+
+ private:
+  ChainErrors e_;
+  std::mt19937& rng_;
+  std::normal_distribution<double> noise_;
+};
 
 }  // namespace pepper::core::ceiling::test_support

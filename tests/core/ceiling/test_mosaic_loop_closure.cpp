@@ -31,46 +31,12 @@ using test_support::SyntheticCeiling;
 
 constexpr double kStepM = 0.02;  // between frames: 0.3 m/s at 15 Hz
 
-struct Path {
-  std::vector<PlanarPose> truth;  // T_world_base per frame
-  size_t back_at_start = 0;       // first frame back at the start (loops)
-};
+using Path = test_support::SyntheticPath;
+using Errors = test_support::ChainErrors;
 
-// A rounded rectangle driven counter-clockwise from (0, 0) heading +x: straights of 4 m and
-// 2 m, 90 degree left turns of radius 1 m (18.3 m), back at the start, then `overlap_m` more
-// along the first straight: the loop's end sees its beginning again.
 Path rounded_rectangle(double overlap_m) {
-  Path path;
-  PlanarPose p{0.0, 0.0, 0.0};
-  path.truth.push_back(p);
-  auto straight = [&](double length_m) {
-    const int n = static_cast<int>(std::lround(length_m / kStepM));
-    for (int i = 0; i < n; ++i) path.truth.push_back(p = p * PlanarPose{length_m / n, 0.0, 0.0});
-  };
-  auto turn = [&]() {
-    constexpr double kRadiusM = 1.0;
-    const int n = static_cast<int>(std::lround(0.5 * M_PI * kRadiusM / kStepM));
-    const double dth = 0.5 * M_PI / n, chord = 2.0 * kRadiusM * std::sin(0.5 * dth);
-    for (int i = 0; i < n; ++i)
-      path.truth.push_back(
-          p = p * PlanarPose{chord * std::cos(0.5 * dth), chord * std::sin(0.5 * dth), dth});
-  };
-  for (int side = 0; side < 2; ++side) {
-    straight(4.0);
-    turn();
-    straight(2.0);
-    turn();
-  }
-  path.back_at_start = path.truth.size() - 1;
-  straight(overlap_m);
-  return path;
+  return test_support::rounded_rectangle(overlap_m, kStepM);
 }
-
-struct Errors {
-  double noise_m = 0.003;
-  double flip = 0.1;
-  double stretch_1_m = 0.01;
-};
 
 struct TeachRun {
   Path path;
@@ -90,21 +56,11 @@ TeachRun teach(const Path& path, const MosaicBuilderOptions& options, const Erro
   // The loop spans x in [-1, 5], y in [0, 4]; the view reaches 1.3 m ahead and 0.6 m aside.
   run.ceiling = test_support::make_synthetic_ceiling(seed, -2.5, 90, -1.5, 70);
   std::mt19937 rng(seed + 100);
-  std::normal_distribution<double> noise(0.0, e.noise_m);
-  const uint32_t flip_below = static_cast<uint32_t>(e.flip * 4294967295.0);
+  test_support::ChainErrorInjector errors(e, rng);
   MosaicBuilder builder(options);
   for (const PlanarPose& T_world_base : path.truth) {
     CeilingObservation o = test_support::see_synthetic(run.ceiling, T_world_base, rng, 10);
-    for (cv::Point2d& p : o.p_base_m) {
-      p.x *= 1.0 + e.stretch_1_m * (p.x - 0.8);
-      if (e.noise_m > 0.0) p += cv::Point2d(noise(rng), noise(rng));
-    }
-    o.descriptors = o.descriptors.clone();
-    for (int r = 0; e.flip > 0.0 && r < o.descriptors.rows; ++r)
-      for (int b = 0; b < kMosaicDescriptorBytes; ++b)
-        for (int bit = 0; bit < 8; ++bit)
-          if (rng() < flip_below)
-            o.descriptors.at<uint8_t>(r, b) ^= static_cast<uint8_t>(1u << bit);
+    errors.apply(o);
     builder.add_frame(o);
   }
   run.mosaic = builder.mosaic();

@@ -25,10 +25,28 @@
 // is compared only with mosaic landmarks within `search_radius_m` of where the previous pose puts
 // it, best Hamming distance <= `max_hamming`, each mosaic landmark used once. A frame without
 // consensus (too few inliers) is reported as not localised and adds nothing; the next frame is
-// matched with the last good pose. There is no global re-localisation during teach: a teach that
-// loses the ceiling while the base moves farther than search_radius_m stays lost (every later
-// frame reports localised = false); the teach session warns (a ceiling_lost event, the UI status,
-// map info's warning) and does not recover.
+// matched with the last good pose.
+//
+// Re-localisation (docs/method/ceiling.md, "Re-localising after a loss"): a frame that the guided
+// matching cannot pose (the ceiling was lost, e.g. hidden while the base moved farther than
+// search_radius_m) is localised against the kept landmarks WITHOUT a prior, by MosaicLocaliser
+// (brute-force descriptor matching, RANSAC, guided re-matching, and its acceptance test that
+// refuses views of unmapped ceiling), on the first lost frame and then every
+// `relocalisation.every_frames` lost frames (the cost grows with the mosaic). A fix replaces the
+// last good pose as the prior of the ordinary frame step (guided matching, RANSAC, loop check,
+// new landmarks); when that step poses the frame, the chain continues from there. The first
+// frame that the guided matching from the last good pose poses again after a loss is checked by
+// one such search too: from a pose left far behind, the guided matching can lock onto a repeated
+// ceiling (the test hall's tiles: 1.2 m off on renders); where the two poses put the frame's
+// landmarks more than the RANSAC threshold apart, the one whose fit has more inliers wins. The
+// chained distance `travelled_m` grows across the gap by the straight line from the last good pose
+// to the re-localised one (a lower bound of the path driven blind; it is also what a frame found
+// again by the guided matching after a loss adds). Lost frames still add nothing. Nothing is
+// compared with where the chain was before the loss (the motion while lost is unknown), so what
+// was built before the gap keeps its drift. No motion gate: a fix may be anywhere on the mosaic
+// (a teach may pause its recording and resume elsewhere), so a ceiling that repeats an earlier
+// part exactly would be taken for it. A teach that never loses the ceiling is built exactly as
+// without the feature (relocalisation.enabled = false).
 //
 // Loop closure (docs/method/ceiling.md, "Closing a loop"): a teach that comes back under ceiling
 // it mapped long before re-observes *old* landmarks (kept, and not seen as an inlier for
@@ -51,10 +69,12 @@
 #include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
 #include "core/ceiling/mosaic.hpp"
+#include "core/ceiling/mosaic_localiser.hpp"
 #include "core/ceiling/observation.hpp"
 #include "core/ceiling/planar_rigid.hpp"
 
@@ -83,6 +103,22 @@ struct LoopClosureOptions {
   void check() const;
 };
 
+/// Re-localisation after a loss (see the header's comment). Defaults: docs/method/ceiling.md,
+/// "Re-localising after a loss".
+struct RelocalisationOptions {
+  bool enabled = true;
+  /// While lost, a search without a prior on the first lost frame and then on every this many
+  /// lost frames, >= 1 (and one to check the first frame posed again): each matches the frame
+  /// against every kept landmark, about 3 us CPU per landmark (7.6 ms for the 2623 of the test
+  /// tour's renders).
+  int every_frames = 3;
+  /// The localiser's options (its acceptance test refuses views of unmapped ceiling).
+  LocaliserOptions localiser;
+
+  /// Throws std::invalid_argument naming the first invalid field (as "relocalisation.<field>").
+  void check() const;
+};
+
 struct MosaicBuilderOptions {
   double px_per_m = 80.0;            ///< the canonical view's scale, recorded in the mosaic, > 0
   double search_radius_m = 0.4;      ///< motion between two frames plus prediction error, > 0
@@ -94,6 +130,7 @@ struct MosaicBuilderOptions {
   double landmark_step_rad = 0.05;   ///< ... or turned this much since the last ones, >= 0
   RigidRansacOptions ransac{0.03, 10, 300, 1};
   LoopClosureOptions loop;
+  RelocalisationOptions relocalisation;
 
   /// Throws std::invalid_argument naming the first invalid field.
   void check() const;
@@ -117,6 +154,10 @@ struct MosaicFrameResult {
   std::vector<LandmarkSighting> sightings;  ///< inlier (and new) landmarks of this frame
   double travelled_m = 0.0;  ///< chained path length from the first frame (as when added)
   bool closed_loop = false;  ///< this frame closed a loop (MosaicBuilder::loop_closures())
+  /// This frame was posed from a search without a prior after a loss: a lost frame, or the first
+  /// frame posed again where the search overruled the guided matching
+  /// (MosaicBuilder::relocalisations()).
+  bool relocalised = false;
 };
 
 /// One loop closure: what was corrected.
@@ -129,6 +170,15 @@ struct LoopClosure {
   double error_before_m = 0.0;     ///< median misplacement of those by the recent chain
   int landmarks_moved = 0;
   int frames_moved = 0;
+};
+
+/// One re-localisation after a loss.
+struct Relocalisation {
+  int64_t frame = -1;            ///< the re-localised frame
+  int64_t last_good_frame = -1;  ///< the last frame with a pose before the loss
+  int attempts = 0;              ///< searches without a prior during the loss, this one included
+  int inliers = 0;               ///< of the frame's fit from the re-localised pose
+  double gap_m = 0.0;            ///< straight line from the last good pose (added to travelled_m)
 };
 
 class MosaicBuilder {
@@ -149,6 +199,10 @@ class MosaicBuilder {
   size_t candidates() const;
   /// The loop closures so far, in order.
   const std::vector<LoopClosure>& loop_closures() const { return closures_; }
+  /// The re-localisations so far, in order.
+  const std::vector<Relocalisation>& relocalisations() const { return relocalisations_; }
+  /// Searches without a prior so far (each one the cost stated in RelocalisationOptions).
+  int64_t relocalisation_attempts() const { return relocalisation_attempts_; }
 
  private:
   struct Landmark {
@@ -178,6 +232,9 @@ class MosaicBuilder {
   std::vector<Pair> guided_matches(const CeilingObservation& obs, const PlanarPose& prior,
                                    bool skip_old) const;
   bool old_landmark(const Landmark& l) const;
+  // After a loss: the pose of a search without a prior, when one is due (or `always`) and
+  // accepted by the localiser (see the header's comment).
+  std::optional<PlanarPose> relocalise(const CeilingObservation& obs, bool always);
   enum class LoopVerdict { kNone, kAgree, kCorrected };
   struct LoopCheck {
     LoopVerdict verdict = LoopVerdict::kNone;
@@ -200,6 +257,14 @@ class MosaicBuilder {
   double travelled_m_ = 0.0;  // chained path length up to the last localised frame (the "now"
                               // of old_landmark while a frame is added)
   std::vector<LoopClosure> closures_;
+  // Re-localisation: frames without a pose since the last good one, the localiser over the kept
+  // landmarks (built at a loss's first search; the kept landmarks do not change while lost).
+  int64_t last_good_frame_ = 0;
+  int lost_frames_ = 0;
+  int loss_attempts_ = 0;
+  std::optional<MosaicLocaliser> lost_localiser_;
+  std::vector<Relocalisation> relocalisations_;
+  int64_t relocalisation_attempts_ = 0;
 };
 
 }  // namespace pepper::core::ceiling
