@@ -10,6 +10,8 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
 
 #include "memory/detail/binary_io.hpp"
 #include "memory/detail/file_io.hpp"
@@ -35,6 +37,42 @@ uint32_t body_crc(json j) {
 
 bool finite(const PlanarPose& p) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
+}
+
+json height_check_json(const HeightCheck& h) {
+  return {{"status", to_string(h.status)},
+          {"configured_height_m", h.configured_height_m},
+          {"configured_above_camera_m", h.configured_above_camera_m},
+          {"windows", h.windows},
+          {"windows_rejected", h.windows_rejected},
+          {"windows_turning", h.windows_turning},
+          {"odometry_m", h.odometry_m},
+          {"scale_ratio", h.scale_ratio},
+          {"scale_ratio_spread", h.scale_ratio_spread},
+          {"scale_ratio_sigma", h.scale_ratio_sigma},
+          {"estimated_above_camera_m", h.estimated_above_camera_m},
+          {"estimated_height_m", h.estimated_height_m},
+          {"estimated_sigma_m", h.estimated_sigma_m},
+          {"disagrees", h.disagrees}};
+}
+
+HeightCheck height_check_from_json(const json& j) {
+  HeightCheck h;  // an unknown status throws std::invalid_argument
+  h.status = height_check_status_from_string(j.at("status").get<std::string>());
+  h.configured_height_m = j.at("configured_height_m").get<double>();
+  h.configured_above_camera_m = j.at("configured_above_camera_m").get<double>();
+  h.windows = j.at("windows").get<int>();
+  h.windows_rejected = j.at("windows_rejected").get<int>();
+  h.windows_turning = j.at("windows_turning").get<int>();
+  h.odometry_m = j.at("odometry_m").get<double>();
+  h.scale_ratio = j.at("scale_ratio").get<double>();
+  h.scale_ratio_spread = j.at("scale_ratio_spread").get<double>();
+  h.scale_ratio_sigma = j.at("scale_ratio_sigma").get<double>();
+  h.estimated_above_camera_m = j.at("estimated_above_camera_m").get<double>();
+  h.estimated_height_m = j.at("estimated_height_m").get<double>();
+  h.estimated_sigma_m = j.at("estimated_sigma_m").get<double>();
+  h.disagrees = j.at("disagrees").get<bool>();
+  return h;
 }
 
 }  // namespace
@@ -70,6 +108,9 @@ std::vector<std::string> CeilingTour::validate() const {
                    ceiling->height_m > ceiling->above_camera_m)) {
     e.push_back("ceiling: above_camera_m must be > 0 and below height_m");
   }
+  if (height_check) {
+    for (const std::string& m : height_check->validate()) e.push_back(m);
+  }
   return e;
 }
 
@@ -95,7 +136,9 @@ void save_ceiling_tour(const CeilingTour& tour, const fs::path& file) {
             {"driven_m", tour.driven_m},
             {"ceiling", tour.ceiling ? json{{"height_m", tour.ceiling->height_m},
                                             {"above_camera_m", tour.ceiling->above_camera_m}}
-                                     : json(nullptr)}};
+                                     : json(nullptr)},
+            {"height_check", tour.height_check ? height_check_json(*tour.height_check)
+                                               : json(nullptr)}};
   j["crc32"] = body_crc(j);
   const std::string text = j.dump(1) + "\n";
 
@@ -118,7 +161,7 @@ CeilingTour load_ceiling_tour(const fs::path& file) {
       throw CeilingTourError(
           file, std::string("not a ceiling tour file (format != ") + kFormatName + ")");
     const int version = j.at("format_version").get<int>();
-    if (version != kCeilingTourFormatVersion && version != 1)
+    if (version < 1 || version > kCeilingTourFormatVersion)
       throw CeilingTourError(file, "ceiling tour format version " + std::to_string(version) +
                                        ", this build reads versions 1 to " +
                                        std::to_string(kCeilingTourFormatVersion));
@@ -145,8 +188,14 @@ CeilingTour load_ceiling_tour(const fs::path& file) {
                                   c.at("above_camera_m").get<double>()};
       }
     }
+    if (version >= 3) {  // versions 1 and 2 did not check the height
+      const json& h = j.at("height_check");
+      if (!h.is_null()) t.height_check = height_check_from_json(h);
+    }
   } catch (const json::exception& e) {
     throw CeilingTourError(file, std::string("missing or mistyped field: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw CeilingTourError(file, std::string("height_check: ") + e.what());
   }
   const auto errors = t.validate();
   if (!errors.empty()) throw CeilingTourError(file, errors.front());

@@ -80,6 +80,11 @@ int run_map_info(const MapInfoArgs& a) {
       const CeilingParts parts = load_ceiling_parts(a.dir, summary);
       std::cout << summary.to_text() << ceiling_summary_text(parts);
       for (const auto& w : ceiling_warnings(parts.tour)) std::cout << "warning: " << w << "\n";
+      if (parts.tour.height_check) {
+        if (const auto w = ceiling_height_warning(*parts.tour.height_check)) {
+          std::cout << "warning: " << *w << "\n";
+        }
+      }
     } else {
       std::cout << summary.to_text();
       for (const auto& w : check_tour(summary, tour_check_options())) {

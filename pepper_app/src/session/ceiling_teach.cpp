@@ -1,6 +1,7 @@
 #include "session/ceiling_teach.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "core/ceiling/landmarks.hpp"
@@ -69,6 +70,23 @@ cc::MosaicBuilderOptions builder_options(const CeilingTeachOptions& o) {
 
 }  // namespace
 
+std::optional<std::string> ceiling_height_warning(const cc::HeightCheck& h) {
+  if (!h.estimated() || !h.disagrees) return std::nullopt;
+  // s > 1: the mosaic is longer than the odometry, the configured ceiling too high.
+  const double off = h.scale_ratio - 1.0;
+  char text[640];
+  std::snprintf(text, sizeof text,
+                "ceiling height: the odometry measures the ceiling %.2f m above the floor "
+                "(+- %.3f m, %d stretches, %.1f m), not the configured %.2f m: every distance of "
+                "this map is %.0f %% too %s. Measure the ceiling's height again and teach again "
+                "with it (e.g. --set robot.ceiling_height_m=%.2f); the odometry's own scale error "
+                "(a few %%) is in this figure",
+                h.estimated_height_m, h.estimated_sigma_m, h.windows, h.odometry_m,
+                h.configured_height_m, std::abs(off) * 100.0, off > 0.0 ? "long" : "short",
+                h.estimated_height_m);
+  return std::string(text);
+}
+
 CeilingTeacher::CeilingTeacher(const CeilingCameraSetup& setup,
                                const core::CameraIntrinsics& camera,
                                const core::features::FeatureExtractorOptions& extractor,
@@ -81,6 +99,7 @@ CeilingTeacher::CeilingTeacher(const CeilingCameraSetup& setup,
           setup.camera, cc::fit_frame(setup.camera, options.px_per_m, options.max_forward_m))),
       builder_(builder_options(options)) {
   options_.relay.check();
+  options_.height_check.check();
 }
 
 cc::MosaicFrameResult CeilingTeacher::add_frame(const core::Frame& frame, double travelled_m) {
@@ -152,6 +171,14 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
     }
     break;
   }
+
+  // The configured ceiling height against the odometry (core/ceiling/height_check.hpp).
+  std::vector<std::optional<core::OdometryPose>> odometry;
+  odometry.reserve(frames_.size());
+  for (const Kept& k : frames_) odometry.push_back(k.odom);
+  out.tour.height_check = cc::check_ceiling_height(
+      cc::height_check_frames(results, odometry), setup_.cam_in_base_m, setup_.ceiling_height_m,
+      setup_.camera.ceiling_above_cam_m, options_.height_check);
   return out;
 }
 

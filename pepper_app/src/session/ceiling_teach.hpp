@@ -11,7 +11,9 @@
 // The camera geometry (ceiling height above the optical centre, the optical centre on the base)
 // comes from the simulated robot (ceiling_camera_of_mock) or, on a real Pepper, from its head
 // geometry and the configured robot.ceiling_height_m (ceiling_camera_of_pepper). The tour records
-// that ceiling (CeilingTour::ceiling) so that a replay under another one is refused.
+// that ceiling (CeilingTour::ceiling) so that a replay under another one is refused, and checks
+// it against the wheel odometry (core/ceiling/height_check.hpp; CeilingTour::height_check): a
+// wrong height scales every distance of the mosaic, and finish() says so, it never changes it.
 // Frames and units: core/ceiling (base frame x forward, y left, metres; mosaic frame = base frame
 // of the first frame). Errors: bad options throw std::invalid_argument; finish() throws
 // std::runtime_error when the tour gives no usable mosaic (fewer than 2 frames or no landmark).
@@ -27,6 +29,7 @@
 
 #include "core/ceiling/canonical_view.hpp"
 #include "core/ceiling/ceiling_tour.hpp"
+#include "core/ceiling/height_check.hpp"
 #include "core/ceiling/mosaic.hpp"
 #include "core/ceiling/mosaic_builder.hpp"
 #include "core/ceiling/relay_images.hpp"
@@ -71,7 +74,13 @@ struct CeilingTeachOptions {
   double max_forward_m = 3.5;
   core::ceiling::MosaicBuilderOptions builder;  ///< its px_per_m is replaced by the one above
   core::ceiling::RelayOptions relay;
+  core::ceiling::HeightCheckOptions height_check;
 };
+
+/// The warning for a height check that disagrees with the configured height (nullopt when it
+/// agrees or gave no estimate): the measured height, by how much every distance of the map is
+/// off, and how to re-teach (--set robot.ceiling_height_m=X). For the console and `map info`.
+std::optional<std::string> ceiling_height_warning(const core::ceiling::HeightCheck& check);
 
 /// A ceiling-mode map: the three parts saved in one map folder (ceiling_map.hpp).
 struct CeilingMap {

@@ -1,7 +1,8 @@
 // The ceiling tour's file (ceiling_tour.hpp): an exact round trip (with and without the odometry
-// figure), the taught ceiling recorded (and absent from a version-1 file), and corruption refused with the file named: missing, truncated, a changed number (CRC),
-// another format or version, an edited field with the CRC patched to agree; invalid tours are not
-// written.
+// figure, with and without the height check), the taught ceiling recorded (and absent from a
+// version-1 file), the height check (absent from a version-2 file), and corruption refused with
+// the file named: missing, truncated, a changed number (CRC), another format or version, an
+// edited field with the CRC patched to agree; invalid tours are not written.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -39,6 +40,22 @@ CeilingTour sample() {
   t.odometry_disagreement_m = 0.0421;
   t.driven_m = 2.61;
   t.ceiling = TaughtCeiling{2.75, 1.577};
+  HeightCheck h;
+  h.status = HeightCheckStatus::kEstimated;
+  h.configured_height_m = 2.75;
+  h.configured_above_camera_m = 1.577;
+  h.windows = 17;
+  h.windows_rejected = 1;
+  h.windows_turning = 3;
+  h.odometry_m = 12.31;
+  h.scale_ratio = 1.0912;
+  h.scale_ratio_spread = 0.0071;
+  h.scale_ratio_sigma = 0.0017;
+  h.estimated_above_camera_m = 1.577 / 1.0912;
+  h.estimated_height_m = 2.75 - 1.577 + h.estimated_above_camera_m;
+  h.estimated_sigma_m = 0.0023;
+  h.disagrees = true;
+  t.height_check = h;
   return t;
 }
 
@@ -66,7 +83,13 @@ TEST(CeilingTourFile, RoundTripIsExact) {
   const fs::path f = dir.path() / "ceiling_tour.json";
   for (const bool with_odometry : {true, false}) {
     CeilingTour t = sample();
-    if (!with_odometry) t.odometry_disagreement_m.reset();
+    if (!with_odometry) {
+      t.odometry_disagreement_m.reset();
+      t.height_check->status = HeightCheckStatus::kNoOdometry;
+      t.height_check->windows = 0;
+      t.height_check->scale_ratio = 0.0;
+      t.height_check->disagrees = false;
+    }
     save_ceiling_tour(t, f);
     const CeilingTour back = load_ceiling_tour(f);
     EXPECT_EQ(back.frames, t.frames);
@@ -86,6 +109,29 @@ TEST(CeilingTourFile, RoundTripIsExact) {
     ASSERT_TRUE(back.ceiling.has_value());
     EXPECT_EQ(back.ceiling->height_m, 2.75);
     EXPECT_EQ(back.ceiling->above_camera_m, 1.577);
+    ASSERT_TRUE(back.height_check.has_value());
+    const HeightCheck& h = *back.height_check;
+    const HeightCheck& want = *t.height_check;
+    EXPECT_EQ(h.status, want.status);
+    EXPECT_EQ(h.configured_height_m, want.configured_height_m);
+    EXPECT_EQ(h.configured_above_camera_m, want.configured_above_camera_m);
+    EXPECT_EQ(h.windows, want.windows);
+    EXPECT_EQ(h.windows_rejected, want.windows_rejected);
+    EXPECT_EQ(h.windows_turning, want.windows_turning);
+    EXPECT_EQ(h.odometry_m, want.odometry_m);
+    EXPECT_EQ(h.scale_ratio, want.scale_ratio);
+    EXPECT_EQ(h.scale_ratio_spread, want.scale_ratio_spread);
+    EXPECT_EQ(h.scale_ratio_sigma, want.scale_ratio_sigma);
+    EXPECT_EQ(h.estimated_above_camera_m, want.estimated_above_camera_m);
+    EXPECT_EQ(h.estimated_height_m, want.estimated_height_m);
+    EXPECT_EQ(h.estimated_sigma_m, want.estimated_sigma_m);
+    EXPECT_EQ(h.disagrees, want.disagrees);
+  }
+  {  // not checked at all
+    CeilingTour t = sample();
+    t.height_check.reset();
+    save_ceiling_tour(t, f);
+    EXPECT_FALSE(load_ceiling_tour(f).height_check.has_value());
   }
   // No temporary file left beside it.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
@@ -116,8 +162,8 @@ TEST(CeilingTourFile, CorruptionIsRefusedNamingTheFile) {
     j["crc32"] = crc32(j.dump());
     write(f, j.dump());
   };
-  patched([](nlohmann::json& j) { j["format_version"] = 3; });
-  expect_refused(f, "format version 3");
+  patched([](nlohmann::json& j) { j["format_version"] = 4; });
+  expect_refused(f, "format version 4");
   patched([](nlohmann::json& j) { j["format"] = "pepper-ceiling-mosaic"; });
   expect_refused(f, "not a ceiling tour file");
   patched([](nlohmann::json& j) { j["relay_images"][1]["frame"] = 0; });
@@ -136,6 +182,31 @@ TEST(CeilingTourFile, CorruptionIsRefusedNamingTheFile) {
   expect_refused(f, "ceiling: above_camera_m");
   patched([](nlohmann::json& j) { j.erase("ceiling"); });
   expect_refused(f, "missing or mistyped field");
+  patched([](nlohmann::json& j) { j.erase("height_check"); });
+  expect_refused(f, "missing or mistyped field");
+  patched([](nlohmann::json& j) { j["height_check"]["status"] = "guessed"; });
+  expect_refused(f, "unknown height check status");
+  patched([](nlohmann::json& j) { j["height_check"]["scale_ratio"] = -1.0; });
+  expect_refused(f, "height_check: scale_ratio");
+  patched([](nlohmann::json& j) { j["height_check"]["windows"] = -2; });
+  expect_refused(f, "height_check: window counts");
+}
+
+// A tour written before the height check (format version 2) still loads, without it.
+TEST(CeilingTourFile, VersionTwoLoadsWithoutTheHeightCheck) {
+  test::TempDir dir("ceiling_tour");
+  const fs::path f = dir.path() / "ceiling_tour.json";
+  save_ceiling_tour(sample(), f);
+  nlohmann::json j = nlohmann::json::parse(read(f));
+  j["format_version"] = 2;
+  j.erase("height_check");
+  j.erase("crc32");
+  j["crc32"] = crc32(j.dump());
+  write(f, j.dump());
+  const CeilingTour back = load_ceiling_tour(f);
+  EXPECT_FALSE(back.height_check.has_value());
+  ASSERT_TRUE(back.ceiling.has_value());
+  EXPECT_EQ(back.ceiling->height_m, 2.75);
 }
 
 // A tour written before the ceiling was recorded (format version 1) still loads, without it.
@@ -147,6 +218,7 @@ TEST(CeilingTourFile, VersionOneLoadsWithoutTheCeiling) {
   ASSERT_EQ(j.at("format_version"), kCeilingTourFormatVersion);
   j["format_version"] = 1;
   j.erase("ceiling");
+  j.erase("height_check");
   j.erase("crc32");
   j["crc32"] = crc32(j.dump());
   write(f, j.dump());

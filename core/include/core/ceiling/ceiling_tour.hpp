@@ -8,11 +8,16 @@
 // Frames and units: poses T_mosaic_base of the base in the mosaic frame (mosaic.hpp: metres,
 // radians counter-clockwise seen from above).
 //
-// File: {"format": "pepper-ceiling-tour", "format_version": 2, "frames", "unlocalised_frames",
+// File: {"format": "pepper-ceiling-tour", "format_version": 3, "frames", "unlocalised_frames",
 // "relay_images": [{"frame", "x_m", "y_m", "theta_rad", "landmark_ids": [...]}], "breaks": [...],
 // "odometry_disagreement_m" (null when the robot gave no odometry), "driven_m", "ceiling":
-// {"height_m", "above_camera_m"}, "crc32"}: CRC-32 of the JSON dump without that field. Version 1
-// (before the ceiling was recorded) is still read, with no "ceiling": a replay cannot check it. Saved atomically (sibling temporary file, fsync, rename,
+// {"height_m", "above_camera_m"}, "height_check": {"status", "configured_height_m",
+// "configured_above_camera_m", "windows", "windows_rejected", "windows_turning", "odometry_m",
+// "scale_ratio", "scale_ratio_spread", "scale_ratio_sigma", "estimated_above_camera_m",
+// "estimated_height_m", "estimated_sigma_m", "disagrees"} (height_check.hpp; null when not
+// checked), "crc32"}: CRC-32 of the JSON dump without that field. Versions 1 (before the ceiling
+// was recorded: no "ceiling", a replay cannot check it) and 2 (before the height check: no
+// "height_check") are still read. Saved atomically (sibling temporary file, fsync, rename,
 // folder fsync); loading validates everything and every problem throws CeilingTourError whose
 // message starts with the file's path.
 
@@ -23,18 +28,19 @@
 #include <string>
 #include <vector>
 
+#include "core/ceiling/height_check.hpp"
 #include "core/ceiling/planar_rigid.hpp"
 
 namespace pepper::core::ceiling {
 
-inline constexpr int kCeilingTourFormatVersion = 2;  ///< written; 1 is still read
+inline constexpr int kCeilingTourFormatVersion = 3;  ///< written; 1 and 2 are still read
 
 /// The ceiling the teach saw: its distance above the camera sets the scale of every metre in the
 /// mosaic and the tour, so a replay must see the same ceiling (ceiling_replay.hpp checks it).
 struct TaughtCeiling {
   double height_m = 0.0;        ///< above the floor (robot.ceiling_height_m or the mock's world)
   double above_camera_m = 0.0;  ///< above the optical centre at the teach's head pitch, > 0
-}; 
+};
 
 struct RelayImageRecord {
   int64_t frame = -1;                 ///< teach frame index (0 = the tour's first), >= 0
@@ -53,6 +59,9 @@ struct CeilingTour {
   double driven_m = 0.0;  ///< the tour's length (the map's measure), >= 0
   /// The teach's ceiling; nullopt only in files of format version 1.
   std::optional<TaughtCeiling> ceiling;
+  /// The teach's ceiling height checked against the odometry (height_check.hpp); nullopt in
+  /// files of format versions 1 and 2.
+  std::optional<HeightCheck> height_check;
 
   /// Messages naming each invalid field; empty when valid.
   std::vector<std::string> validate() const;
