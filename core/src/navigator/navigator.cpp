@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -695,6 +696,15 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   if (prior) {
     tel.vnhv_fix_d2 = fix ? fix->prior_d2 : kNaN;
     tel.vnhv_fix_weight = fix ? fix_weight : kNaN;
+    if (fix) {  // the gate's terms, in metres (control::locate_in_segment's d2)
+      tel.vnhv_gate_dx_m = (fix->pose.x_m - prior->pose.x_m) * vnhv_m_per_unit_;
+      tel.vnhv_gate_dy_m = (fix->pose.y_m - prior->pose.y_m) * vnhv_m_per_unit_;
+      tel.vnhv_gate_dyaw_rad =
+          std::remainder(fix->pose.yaw_rad - prior->pose.yaw_rad, 2.0 * std::numbers::pi);
+      tel.vnhv_gate_sigma_x_m = prior->sigma_x * vnhv_m_per_unit_;
+      tel.vnhv_gate_sigma_y_m = prior->sigma_y * vnhv_m_per_unit_;
+      tel.vnhv_gate_sigma_yaw_rad = prior->sigma_yaw_rad;
+    }
     if (const auto dev = deviation_of(prior->pose)) {
       tel.odom_lateral_m = dev->lateral_m;
       tel.odom_heading_rad = dev->heading_rad;

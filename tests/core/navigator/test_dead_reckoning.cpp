@@ -136,6 +136,11 @@ TEST(DeadReckoning, TelemetryShowsThePredictionTheFixesAreWeighedAgainst) {
       // Its distance from IN in segment lengths (the robot comes near every IN).
       EXPECT_GE(t.vnhv_fix_r_units, 0.0);
       nearest_r = std::min(nearest_r, t.vnhv_fix_r_units);
+      // The gate's terms add up to its distance.
+      const double d2 = std::pow(t.vnhv_gate_dx_m / t.vnhv_gate_sigma_x_m, 2) +
+                        std::pow(t.vnhv_gate_dy_m / t.vnhv_gate_sigma_y_m, 2) +
+                        std::pow(t.vnhv_gate_dyaw_rad / t.vnhv_gate_sigma_yaw_rad, 2);
+      EXPECT_NEAR(d2, t.vnhv_fix_d2, 1e-6 * (1.0 + t.vnhv_fix_d2)) << "frame " << i;
       if (!t.vnhv_fix_refused) {
         EXPECT_GT(t.vnhv_fix_weight, 0.0);
       }

@@ -101,6 +101,12 @@ struct Telemetry {
   /// The fix's distance from IN in segment units (|IP -> IN| = 1; beyond 1 it extrapolates the
   /// segment's reconstruction); NaN without a fix.
   double vnhv_fix_r_units = kNaN;
+  /// The gate's terms (docs/method/navigator.md "Right fixes refused after a blind turn"): the
+  /// fix's pose minus the prediction's in IN's floor frame (x along IN's optical axis, y across
+  /// it, m; yaw, rad) and the prediction's sigmas there; vnhv_fix_d2 is the sum of the squared
+  /// ratios. NaN without a fix or without a prediction.
+  double vnhv_gate_dx_m = kNaN, vnhv_gate_dy_m = kNaN, vnhv_gate_dyaw_rad = kNaN;
+  double vnhv_gate_sigma_x_m = kNaN, vnhv_gate_sigma_y_m = kNaN, vnhv_gate_sigma_yaw_rad = kNaN;
   /// After an accepted fix with odometry: the probability that the segment's fixes come from the
   /// room rather than from a moved object (navigator/fix_error_mixture.hpp). Below one half the
   /// fix neither corrects the VNHV filter nor counts as the robot located.
