@@ -13,6 +13,7 @@
 #include "offline/offline_jobs.hpp"
 #include "report/map_page.hpp"
 #include "session/ceiling_map.hpp"
+#include "session/session_cli.hpp"
 #include "session/taught_path.hpp"
 #include "session/teach_session.hpp"
 
@@ -57,6 +58,7 @@ struct MapBuildArgs {
   double fps = 15.0;
   ConfigSources config;
   std::string steps_csv;
+  std::string mode;  ///< --mode; "": the recording's own (forward when it does not say)
 };
 
 /// The teach's threshold for weak key images, so `map info`, `map show` and the
@@ -190,14 +192,80 @@ int run_map_trim(const MapTrimArgs& a) {
   }
 }
 
+/// `map build` of a ceiling teach's recording (issue 24): the live teach's CeilingTeacher over
+/// the recorded frames, saved as the live teach saves it (save_ceiling_map: one atomic rename).
+int run_ceiling_map_build(const MapBuildArgs& a, const AppConfig& config, const Recording& rec) {
+  if (a.every_frame_key || !a.steps_csv.empty()) {
+    const std::string option = a.every_frame_key ? "--every-frame-key" : "--steps-csv";
+    return usage_error("build", option +
+                                    " is for forward maps: a ceiling map's key images are the "
+                                    "relay images the mosaic chooses; drop it");
+  }
+  CeilingBuildInputs inputs;
+  inputs.ceiling_height_m = config.robot.ceiling_height_m;
+  inputs.head_pitch_rad = config.robot.ceiling_head_pitch_rad;
+  CeilingCameraSetup setup;
+  try {
+    setup = ceiling_setup_for_build(rec, recording_frame_camera(rec), inputs);
+  } catch (const std::invalid_argument& e) {
+    return usage_error("build", e.what());
+  }
+  const bool recorded = rec.setup && rec.setup->ceiling;
+  const bool as_recorded = recorded && setup.ceiling_height_m == rec.setup->ceiling->height_m;
+  std::cerr << "map build: ceiling mode, head at " << setup.camera.head_pitch_rad
+            << " rad, ceiling " << setup.ceiling_height_m << " m above the floor ("
+            << setup.camera.ceiling_above_cam_m << " m above the camera; "
+            << (as_recorded ? "as recorded"
+                : recorded  ? "the recorded camera under robot.ceiling_height_m"
+                            : "Pepper's head geometry, the recording does not give its camera")
+            << ")\n";
+  ProgressLine progress("ceiling mosaic");
+  const CeilingBuild built = build_ceiling_map_from_recording(
+      rec, setup, config.teach_options().extractor, CeilingTeachOptions{},
+      config_to_json(config).dump(),
+      [&](std::size_t done, std::size_t total) { progress.update(done, total); });
+  progress.finish();
+  const CeilingMap& cm = built.map;
+  save_ceiling_map(cm, a.map);  // atomic: the map, the mosaic and the tour replace it together
+  std::cout << core::memory::summarize(cm.map).to_text()
+            << ceiling_summary_text({cm.mosaic, cm.tour});
+  if (built.relocalisations > 0 || built.loops_closed > 0) {
+    std::cout << "re-localised " << built.relocalisations << " time(s), loops closed "
+              << built.loops_closed << "\n";
+  }
+  for (const auto& w : ceiling_warnings(cm.tour)) std::cout << "warning: " << w << "\n";
+  if (cm.tour.height_check) {
+    if (const auto w = ceiling_height_warning(*cm.tour.height_check)) {
+      std::cout << "warning: " << *w << "\n";
+    }
+  }
+  std::cout << "ceiling map written to " << a.map << "\n";
+  return 0;
+}
+
 int run_map_build(const MapBuildArgs& a) {
   try {
     const AppConfig config = load_app_config(a.config);
     const auto camera = load_camera_option(a.camera);
+    const std::optional<core::NavMode> requested =
+        a.mode.empty() ? std::nullopt : std::optional<core::NavMode>(parse_mode(a.mode));
     const Recording rec = read_recording(a.recording, camera, a.fps);
     for (const auto& w : rec.warnings) std::cerr << "pepper_app: warning: " << w << "\n";
     std::cerr << "map build: " << rec.frames.size() << " frames from " << a.recording << " ("
               << rec.source << ")\n";
+    core::NavMode mode = core::NavMode::kForward;
+    try {
+      mode = map_build_mode(rec, requested);
+    } catch (const std::invalid_argument& e) {
+      return usage_error("build", e.what());
+    }
+    if (mode == core::NavMode::kCeiling) return run_ceiling_map_build(a, config, rec);
+    if (!rec.setup && !requested && rec.version > 0) {
+      std::cerr << "map build: " << a.recording << " does not say which mode it was taught in "
+                << "(recording format " << rec.version << ", or a replay's): built as a "
+                << "forward map; for a ceiling teach's recording give --mode ceiling --set "
+                << "robot.ceiling_height_m=H\n";
+    }
     ProgressLine progress(a.every_frame_key ? "features" : "key-image selection");
     std::vector<core::mapping::TeachStep> steps;
     const core::memory::VisualMemory map = build_map_from_recording(
@@ -278,7 +346,10 @@ void register_map_command(CLI::App& app) {
   auto* build = map->add_subcommand(
       "build",
       "Build a map from a recorded teach session (or a plain folder of images in name order).\n"
-      "Key images are chosen by the teach rule nL + nP < epsilon, as during a live teach.");
+      "Key images are chosen by the teach rule nL + nP < epsilon, as during a live teach. A\n"
+      "ceiling teach's recording is rebuilt in ceiling mode (mosaic, relay images, ceiling tour,\n"
+      "height check) as the live teach built it; recordings made before they recorded their\n"
+      "mode need --mode ceiling and the ceiling's height (--set robot.ceiling_height_m=H).");
   build->add_option("--recording", build_args->recording,
                     "Recording folder (ours, or a plain image folder with --camera)")
       ->required();
@@ -291,6 +362,10 @@ void register_map_command(CLI::App& app) {
                   "Take every image as a key image (maps made elsewhere)");
   build->add_option("--fps", build_args->fps, "Nominal frame rate of a plain image folder")
       ->check(CLI::PositiveNumber);
+  build->add_option("--mode", build_args->mode,
+                    "forward or ceiling (default: the mode the recording was taught in; forward "
+                    "when it does not say); the other mode than the recording's is refused")
+      ->check(CLI::IsMember({"forward", "ceiling"}));
   add_config_options(build, build_args->config.file, build_args->config.preset,
                      build_args->config.sets, "key_images.epsilon=60");
   build->add_option("--steps-csv", build_args->steps_csv,
@@ -301,7 +376,12 @@ void register_map_command(CLI::App& app) {
       "  pepper_app map build --recording rec/lab_tour --map maps/lab_tour\n"
       "  pepper_app map build --recording rec/lab_tour --map maps/eps60 --set key_images.epsilon=60\n"
       "  pepper_app map build --recording ../shared/data/pepper_qut_tmap/Edge_01 \\\n"
-      "      --camera cameras/pepper_top_qvga.yaml --every-frame-key --map maps/edge01");
+      "      --camera cameras/pepper_top_qvga.yaml --every-frame-key --map maps/edge01\n"
+      "  pepper_app map build --recording rec/hall_ceiling --map maps/hall_ceiling   # its mode\n"
+      "  pepper_app map build --recording rec/hall_ceiling --map maps/hall_2.6 \\\n"
+      "      --set robot.ceiling_height_m=2.6        # rebuilt under a corrected ceiling height\n"
+      "  pepper_app map build --recording rec/old_ceiling --map maps/old_ceiling \\\n"
+      "      --mode ceiling --set robot.ceiling_height_m=2.7   # recorded before the mode was");
   build->callback([build_args] { exit_code() = run_map_build(*build_args); });
 }
 

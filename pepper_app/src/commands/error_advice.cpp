@@ -31,9 +31,9 @@ std::string next_step_for(const std::exception& e) {
   }
   if (dynamic_cast<const core::ceiling::MosaicError*>(&e) != nullptr ||
       dynamic_cast<const core::ceiling::CeilingTourError*>(&e) != nullptr) {
-    // `map build` rebuilds forward maps only: a ceiling map comes from a ceiling teach.
-    return "the ceiling-mode map is damaged: teach it again with `pepper_app teach --mode "
-           "ceiling`";
+    return "the ceiling-mode map is damaged: rebuild it from its recording with `pepper_app map "
+           "build --recording MAP.recording --map MAP`, or teach it again with `pepper_app teach "
+           "--mode ceiling`";
   }
   if (dynamic_cast<const sim::WorldError*>(&e) != nullptr) {
     return "give a world file that exists and parses, e.g. worlds/robotics_room.yaml "

@@ -1,6 +1,8 @@
 #include "offline/offline_jobs.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <stdexcept>
@@ -29,7 +31,110 @@ core::CameraIntrinsics camera_for(const core::CameraIntrinsics& camera, const cv
   return camera.scaled_to(size.width, size.height);
 }
 
+/// Distance driven to each frame, from the recorded odometry where frames have it, else the
+/// recorded commands, as teach measured it (NaN for plain image folders).
+std::vector<double> travelled_per_frame(const Recording& recording) {
+  std::vector<double> travelled_m(recording.frames.size(),
+                                  std::numeric_limits<double>::quiet_NaN());
+  if (recording.commands_known) {
+    core::mapping::DriveOdometer odometer;
+    for (std::size_t i = 0; i < recording.frames.size(); ++i) {
+      const RecordedFrame& f = recording.frames[i];
+      travelled_m[i] = odometer.on_frame(f.t_ns, f.v_m_s, f.odom);
+    }
+  }
+  return travelled_m;
+}
+
+std::string radians(double rad) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f rad", rad);
+  return text;
+}
+
+/// A number of the recorded configuration (`robot.KEY`), if it holds a finite one.
+std::optional<double> recorded_robot_setting(const Recording& recording, const char* key) {
+  const nlohmann::json& c = recording.config;
+  if (!c.is_object() || !c.contains("robot") || !c["robot"].is_object()) return std::nullopt;
+  const nlohmann::json& r = c["robot"];
+  if (!r.contains(key) || !r[key].is_number()) return std::nullopt;
+  const double v = r[key].get<double>();
+  return std::isfinite(v) ? std::optional<double>(v) : std::nullopt;
+}
+
 }  // namespace
+
+core::NavMode map_build_mode(const Recording& recording, std::optional<core::NavMode> requested) {
+  if (!recording.setup) return requested.value_or(core::NavMode::kForward);
+  const RecordingSetup& taught = *recording.setup;
+  if (!requested || *requested == taught.mode) return taught.mode;
+  const std::string dir = recording.folder.string();
+  if (taught.mode == core::NavMode::kCeiling) {
+    throw std::invalid_argument(
+        dir + " was taught in ceiling mode (head at " + radians(taught.head_pitch_rad) +
+        ", looking up at the ceiling): --mode forward would make key images of the ceiling, "
+        "which a forward replay never sees; build it in ceiling mode (drop --mode forward)");
+  }
+  throw std::invalid_argument(
+      dir + " was taught in forward mode (head at " + radians(taught.head_pitch_rad) +
+      ", looking ahead): its frames do not look up at the ceiling as a ceiling map needs; build "
+      "it in forward mode (drop --mode ceiling), or teach the tour again with --mode ceiling");
+}
+
+core::CameraIntrinsics recording_frame_camera(const Recording& recording) {
+  return camera_for(recording.camera, load_frame(recording, 0).gray.size());
+}
+
+CeilingCameraSetup ceiling_setup_for_build(const Recording& recording,
+                                           const core::CameraIntrinsics& camera,
+                                           const CeilingBuildInputs& inputs) {
+  if (recording.setup && recording.setup->ceiling) {
+    return ceiling_setup_of_recorded(*recording.setup->ceiling, camera,
+                                     recording.setup->head_pitch_rad, inputs.ceiling_height_m);
+  }
+  // Not recorded: a real Pepper's head geometry (the simulated robot's within a millimetre,
+  // SessionMode.APeppersCeilingCameraIsTheSimulatedOnes) under the height the operator gives.
+  const std::optional<double> recorded_height_m =
+      recorded_robot_setting(recording, "ceiling_height_m");
+  const double height_m = inputs.ceiling_height_m > 0.0 ? inputs.ceiling_height_m
+                          : recorded_height_m && *recorded_height_m > 0.0
+                              ? *recorded_height_m
+                              : 0.0;
+  if (!(height_m > 0.0)) {
+    throw std::invalid_argument(
+        recording.folder.string() +
+        ": this recording does not say how high the ceiling was (" +
+        (recording.version == 1 ? std::string("recording format version 1, before issue 24")
+                                : std::string("not a teach's recording")) +
+        "): give the ceiling's height above the floor where it was recorded, e.g. --set "
+        "robot.ceiling_height_m=2.7 (a mock: world's ceiling_height_m)");
+  }
+  const double pitch_rad =
+      recorded_robot_setting(recording, "ceiling_head_pitch_rad").value_or(inputs.head_pitch_rad);
+  return ceiling_camera_of_pepper(height_m, camera, pitch_rad);
+}
+
+CeilingBuild build_ceiling_map_from_recording(
+    const Recording& recording, const CeilingCameraSetup& setup,
+    const core::features::FeatureExtractorOptions& extractor, const CeilingTeachOptions& options,
+    const std::string& parameters_json, const ProgressFn& progress) {
+  const std::size_t total = recording.frames.size();
+  const std::vector<double> travelled_m = travelled_per_frame(recording);
+  const core::Frame first = load_frame(recording, 0);
+  const cv::Size size = first.gray.size();
+  const core::CameraIntrinsics camera = camera_for(recording.camera, size);
+  CeilingTeacher teacher(setup, camera, extractor, options);
+  CeilingBuild out;
+  for (std::size_t i = 0; i < total; ++i) {
+    const core::Frame frame = i == 0 ? first : load_frame(recording, i);
+    check_size(frame, size, recording, i);
+    if (teacher.add_frame(frame, travelled_m[i]).relocalised) ++out.relocalisations;
+    if (progress) progress(i + 1, total);
+  }
+  out.loops_closed = static_cast<int>(teacher.loop_closures().size());
+  out.map = teacher.finish(parameters_json);
+  return out;
+}
 
 core::memory::VisualMemory build_map_from_recording(const Recording& recording,
                                                     const core::mapping::TeachOptions& options,
@@ -38,16 +143,7 @@ core::memory::VisualMemory build_map_from_recording(const Recording& recording,
                                                     const ProgressFn& progress,
                                                     std::vector<core::mapping::TeachStep>* steps) {
   const std::size_t total = recording.frames.size();
-  // Distance driven to each frame, from the recorded odometry where frames have it, else the
-  // recorded commands, as teach measured it (NaN for plain image folders).
-  std::vector<double> travelled_m(total, std::numeric_limits<double>::quiet_NaN());
-  if (recording.commands_known) {
-    core::mapping::DriveOdometer odometer;
-    for (std::size_t i = 0; i < total; ++i) {
-      const RecordedFrame& f = recording.frames[i];
-      travelled_m[i] = odometer.on_frame(f.t_ns, f.v_m_s, f.odom);
-    }
-  }
+  const std::vector<double> travelled_m = travelled_per_frame(recording);
   const core::Frame first = load_frame(recording, 0);
   const cv::Size size = first.gray.size();
   const core::CameraIntrinsics camera = camera_for(recording.camera, size);

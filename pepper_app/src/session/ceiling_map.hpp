@@ -2,9 +2,9 @@
 // A ceiling-mode map folder (issue 24; docs/method/map_format.md): the map (manifest.json and
 // key images, core/memory/visual_memory.hpp, mode "ceiling", key images = the relay images),
 // plus MAP/mosaic.json (core/ceiling/mosaic.hpp) and MAP/ceiling_tour.json
-// (core/ceiling/ceiling_tour.hpp). Each part is written atomically with its checksums; the map
-// first (its atomic folder rename replaces the whole folder), then the mosaic, then the tour,
-// so a crash in between leaves a ceiling map whose missing part is named on load.
+// (core/ceiling/ceiling_tour.hpp). Each part has its checksums; all three are written into the
+// map's temporary folder, whose one atomic rename replaces the previous map (a crash leaves the
+// old map or the new one); a part damaged later is named on load.
 // Loading checks the parts against each other: one relay image per key image (same frames),
 // every landmark a relay image sees in the mosaic. Errors throw (MapError, MosaicError,
 // CeilingTourError, or std::runtime_error naming the file for a disagreement).

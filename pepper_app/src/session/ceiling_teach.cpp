@@ -60,6 +60,32 @@ CeilingCameraSetup ceiling_camera_for(const sim::MockRobot* mock, double ceiling
               : ceiling_camera_of_pepper(ceiling_height_m, camera, head_pitch_rad);
 }
 
+RecordedCeiling to_recorded(const CeilingCameraSetup& setup) {
+  return {setup.ceiling_height_m, setup.camera.ceiling_above_cam_m, setup.cam_in_base_m.x,
+          setup.cam_in_base_m.y};
+}
+
+CeilingCameraSetup ceiling_setup_of_recorded(const RecordedCeiling& recorded,
+                                             const core::CameraIntrinsics& camera,
+                                             double head_pitch_rad, double ceiling_height_m) {
+  const cv::Point2d cam_in_base_m(recorded.cam_in_base_x_m, recorded.cam_in_base_y_m);
+  if (!(ceiling_height_m > 0.0) || ceiling_height_m == recorded.height_m) {
+    // As recorded, bit for bit (no height recomputed through a subtraction).
+    CeilingCameraSetup s = ceiling_camera_setup(
+        recorded.height_m, recorded.height_m - recorded.above_camera_m, cam_in_base_m, camera,
+        head_pitch_rad, "ceiling mode: the recorded ceiling is not above the camera");
+    s.camera.ceiling_above_cam_m = recorded.above_camera_m;
+    return s;
+  }
+  const double cam_height_m = recorded.height_m - recorded.above_camera_m;
+  return ceiling_camera_setup(ceiling_height_m, cam_height_m, cam_in_base_m, camera,
+                              head_pitch_rad,
+                              "ceiling mode: robot.ceiling_height_m = " +
+                                  std::to_string(ceiling_height_m) +
+                                  " m is not above the recorded camera (" +
+                                  std::to_string(cam_height_m) + " m above the floor)");
+}
+
 namespace {
 
 cc::MosaicBuilderOptions builder_options(const CeilingTeachOptions& o) {

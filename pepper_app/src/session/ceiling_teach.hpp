@@ -36,6 +36,7 @@
 #include "core/features/image_features.hpp"
 #include "core/frame.hpp"
 #include "core/memory/visual_memory.hpp"
+#include "session/recording.hpp"
 #include "sim/mock_robot.hpp"
 
 namespace pepper::app {
@@ -65,6 +66,18 @@ CeilingCameraSetup ceiling_camera_of_pepper(double ceiling_height_m,
 /// ceiling), else a real Pepper's with the configured height.
 CeilingCameraSetup ceiling_camera_for(const sim::MockRobot* mock, double ceiling_height_m,
                                       const core::CameraIntrinsics& camera, double head_pitch_rad);
+
+/// The setup as a teach records it (recording.hpp, format version 2), and back: the same
+/// numbers, so that `map build` runs the live teach's canonical view on the recorded frames.
+RecordedCeiling to_recorded(const CeilingCameraSetup& setup);
+
+/// The recorded setup with `camera` and `head_pitch_rad` (the recording's). `ceiling_height_m`
+/// > 0 and not the recorded height replaces it, the camera's height on the base staying the
+/// recorded one (a rebuild under a corrected ceiling). Throws std::invalid_argument when the
+/// ceiling is then not above the camera.
+CeilingCameraSetup ceiling_setup_of_recorded(const RecordedCeiling& recorded,
+                                             const core::CameraIntrinsics& camera,
+                                             double head_pitch_rad, double ceiling_height_m = 0.0);
 
 struct CeilingTeachOptions {
   /// Canonical scale: 120 px/m drifted least on the test hall at QVGA (docs/method/ceiling.md).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -19,7 +20,7 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kFormat = "pepper-recording";
-constexpr int kVersion = 1;
+constexpr int kVersion = 2;  // 2: the teach's mode, head pitch and ceiling (issue 24)
 
 core::CameraIntrinsics camera_from_json(const json& j, const fs::path& file) {
   try {
@@ -48,11 +49,81 @@ bool is_image_file(const fs::path& p) {
          ext == ".ppm";
 }
 
+bool finite_numbers(std::initializer_list<double> values) {
+  for (const double v : values) {
+    if (!std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+/// What is wrong with a setup to write or one just read ("" when nothing).
+std::string setup_problem(const RecordingSetup& s) {
+  if (!std::isfinite(s.head_pitch_rad)) return "head_pitch_rad must be a finite number";
+  const bool ceiling_mode = s.mode == core::NavMode::kCeiling;
+  if (ceiling_mode != s.ceiling.has_value()) {
+    return ceiling_mode ? "mode ceiling needs \"ceiling\" {height_m, above_camera_m, "
+                          "camera_in_base_m}"
+                        : "mode forward has no \"ceiling\"";
+  }
+  if (!s.ceiling) return "";
+  const RecordedCeiling& c = *s.ceiling;
+  if (!finite_numbers({c.height_m, c.above_camera_m, c.cam_in_base_x_m, c.cam_in_base_y_m})) {
+    return "ceiling: height_m, above_camera_m, camera_in_base_m {x_m, y_m} must be finite numbers";
+  }
+  if (!(c.above_camera_m > 0.0)) return "ceiling: above_camera_m must be > 0";
+  return "";
+}
+
+json setup_to_json(const RecordingSetup& s) {
+  json j{{"mode", core::to_string(s.mode)}, {"head_pitch_rad", s.head_pitch_rad}};
+  if (s.ceiling) {
+    j["ceiling"] = {{"height_m", s.ceiling->height_m},
+                    {"above_camera_m", s.ceiling->above_camera_m},
+                    {"camera_in_base_m",
+                     {{"x_m", s.ceiling->cam_in_base_x_m}, {"y_m", s.ceiling->cam_in_base_y_m}}}};
+  }
+  return j;
+}
+
+/// The setup of a version-2 manifest; nullopt when it has no "mode" (replay's recordings).
+std::optional<RecordingSetup> setup_from_json(const json& m, const fs::path& file) {
+  if (!m.contains("mode")) return std::nullopt;
+  const auto bad = [&](const std::string& what) {
+    return RecordingError(file.string() + ": " + what);
+  };
+  const auto number = [](const json& o, const char* key) {
+    return o.is_object() && o.contains(key) && o[key].is_number()
+               ? o[key].get<double>()
+               : std::numeric_limits<double>::quiet_NaN();
+  };
+  RecordingSetup s;
+  const std::optional<core::NavMode> mode =
+      m["mode"].is_string() ? core::nav_mode_from_string(m["mode"].get<std::string>())
+                            : std::nullopt;
+  if (!mode) throw bad("mode " + m["mode"].dump() + ": must be \"forward\" or \"ceiling\"");
+  s.mode = *mode;
+  s.head_pitch_rad = number(m, "head_pitch_rad");
+  if (m.contains("ceiling") && !m["ceiling"].is_null()) {
+    const json& c = m["ceiling"];
+    const json in_base = c.is_object() ? c.value("camera_in_base_m", json()) : json();
+    s.ceiling = RecordedCeiling{number(c, "height_m"), number(c, "above_camera_m"),
+                                number(in_base, "x_m"), number(in_base, "y_m")};
+  }
+  if (const std::string p = setup_problem(s); !p.empty()) throw bad(p);
+  return s;
+}
+
 }  // namespace
 
 RecordingWriter::RecordingWriter(fs::path folder, const core::CameraIntrinsics& camera,
-                                 const std::string& source, const std::string& config_json)
+                                 const std::string& source, const std::string& config_json,
+                                 const std::optional<RecordingSetup>& setup)
     : folder_(std::move(folder)) {
+  if (setup) {
+    if (const std::string p = setup_problem(*setup); !p.empty()) {
+      throw RecordingError(folder_.string() + ": recording setup: " + p);
+    }
+  }
   if (fs::exists(folder_) && !fs::is_empty(folder_)) {
     throw RecordingError(folder_.string() + ": recording folder exists and is not empty");
   }
@@ -61,9 +132,10 @@ RecordingWriter::RecordingWriter(fs::path folder, const core::CameraIntrinsics& 
   if (ec) throw RecordingError(folder_.string() + ": cannot create: " + ec.message());
   json config = json::parse(config_json, nullptr, /*allow_exceptions=*/false);
   if (config.is_discarded()) config = json::object();
-  const json manifest{{"format", kFormat}, {"version", kVersion},
-                      {"camera", core::camera::intrinsics_to_json(camera)}, {"source", source},
-                      {"config", config}};
+  json manifest{{"format", kFormat}, {"version", kVersion},
+                {"camera", core::camera::intrinsics_to_json(camera)}, {"source", source},
+                {"config", config}};
+  if (setup) manifest.update(setup_to_json(*setup));
   write_file_atomically(folder_ / "recording.json", manifest.dump(2) + "\n");
   index_.open(folder_ / "frames.jsonl", std::ios::app);
   if (!index_) throw RecordingError((folder_ / "frames.jsonl").string() + ": cannot open");
@@ -119,11 +191,15 @@ Recording read_recording(const fs::path& folder,
     if (manifest.value("format", "") != kFormat) {
       throw RecordingError(manifest_path.string() + ": not a pepper recording (format field)");
     }
-    if (manifest.value("version", 0) != kVersion) {
-      throw RecordingError(manifest_path.string() + ": unsupported version " +
-                           manifest.value("version", json(0)).dump() + " (this build reads " +
-                           std::to_string(kVersion) + ")");
+    const json version = manifest.value("version", json(0));
+    rec.version = version.is_number_integer() ? version.get<int>() : 0;
+    if (rec.version < 1 || rec.version > kVersion) {
+      throw RecordingError(manifest_path.string() + ": unsupported version " + version.dump() +
+                           " (this build reads 1 to " + std::to_string(kVersion) + ")");
     }
+    // Version 1 has no setup: its mode is not known (map build asks for it).
+    if (rec.version >= 2) rec.setup = setup_from_json(manifest, manifest_path);
+    rec.config = manifest.value("config", json());
     rec.camera = camera_override ? *camera_override
                                  : camera_from_json(manifest.value("camera", json()), manifest_path);
     rec.source = manifest.value("source", "");

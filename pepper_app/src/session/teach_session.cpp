@@ -190,15 +190,20 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                           {"head_locked", head.holding},
                           {"detail", bridge.describe()}}},
                         {"recording", recording}});
+    // The recording says how the teach ran (mode, head pitch, ceiling), so that `map build`
+    // rebuilds this map from it (recording.hpp, format version 2).
+    RecordingSetup setup{options.mode, options.head.head_pitch_rad, std::nullopt};
+    std::optional<CeilingCameraSetup> ceiling_setup;
+    if (ceiling_mode) {
+      ceiling_setup = ceiling_camera_for(robot.mock.get(), options.ceiling_height_m, camera,
+                                         options.head.head_pitch_rad);
+      setup.ceiling = to_recorded(*ceiling_setup);
+    }
     if (!options.recording_dir.empty()) {
-      writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json);
+      writer.emplace(options.recording_dir, camera, bridge.describe(), options.config_json, setup);
     }
     if (ceiling_mode) {
-      ceiling_teacher.emplace(
-          ceiling_camera_for(robot.mock.get(), options.ceiling_height_m, camera,
-                             options.head.head_pitch_rad),
-          camera,
-          options.teach.extractor, options.ceiling);
+      ceiling_teacher.emplace(*ceiling_setup, camera, options.teach.extractor, options.ceiling);
     } else {
       teacher.emplace(camera, options.teach);
     }

@@ -1,13 +1,13 @@
 // Every `--help` example that can run offline runs (issue 30, "examples that run"): as an operator
 // types it, in a scratch folder that holds the checkout's shipped files (worlds/, cameras/,
 // tests/, ../shared/) and the user's files the examples name (maps/lab, rec/lab_tour, a.png ...),
-// made beforehand by a short mock teach and a few renders. Each must exit 0 and write the files it
-// names as outputs. Not run, and counted so that a new example is not skipped silently: examples
-// on a real robot (a tcp:// or tcps:// URL not on this machine), with --ui (a person at a
-// browser), and `evaluate` (closed-loop runs of minutes: the evaluation's job). Adjustments,
-// each said where it is made: /tmp/X becomes the scratch folder's tmp/X; the mock teach example
-// stops after 3 m (the whole tour is the demo's job); the mock-robot examples listen on a free
-// port, and the doctor example checks the first of them there.
+// made beforehand by short mock teaches (one in ceiling mode) and a few renders. Each must exit 0
+// and write the files it names as outputs. Not run, and counted so that a new example is not
+// skipped silently: examples on a real robot (a tcp:// or tcps:// URL not on this machine), with
+// --ui (a person at a browser), and `evaluate` (closed-loop runs of minutes: the evaluation's
+// job). Adjustments, each said where it is made: /tmp/X becomes the scratch folder's tmp/X; the
+// mock teach example stops after 3 m (the whole tour is the demo's job); the mock-robot examples
+// listen on a free port, and the doctor example checks the first of them there.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <stdlib.h>
@@ -15,7 +15,9 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -192,6 +194,23 @@ class HelpExamples : public ::testing::Test {
     fs::create_directories(work_ / "rec");
     for (const char* rec : {"rec/lab_tour", "rec/replay1"}) {
       fs::copy(work_ / "maps/lab.recording", work_ / rec, fs::copy_options::recursive);
+    }
+    // map build's ceiling examples: a ceiling teach's recording (rec/hall_ceiling, 2 m of the
+    // ceiling test hall) and the same as recorded before format version 2 (rec/old_ceiling).
+    ASSERT_EQ(run({"teach", "--mode", "ceiling", "--robot", "mock:tests/worlds/ceiling_hall.yaml",
+                   "--map", "maps/hall_taught", "--recording", "rec/hall_ceiling",
+                   "--max-distance", "2", "--set", "robot.camera_width_px=320", "--set",
+                   "robot.camera_height_px=240"},
+                  "fixture_ceiling_teach", &out),
+              0)
+        << out;
+    fs::copy(work_ / "rec/hall_ceiling", work_ / "rec/old_ceiling", fs::copy_options::recursive);
+    {
+      const fs::path manifest = work_ / "rec/old_ceiling/recording.json";
+      nlohmann::json m = nlohmann::json::parse(test::AppProcess::slurp(manifest));
+      m["version"] = 1;
+      for (const char* key : {"mode", "head_pitch_rad", "ceiling"}) m.erase(key);
+      std::ofstream(manifest, std::ios::trunc) << m.dump(2);
     }
     const char* poses[] = {"1.5,1.8,0", "2,1.8,0", "2.5,1.8,0"};
     const char* names[] = {"a.png", "b.png", "c.png"};

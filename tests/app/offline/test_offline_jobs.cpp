@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 #include <opencv2/imgproc.hpp>
 
@@ -150,6 +152,79 @@ TEST_F(OfflineJobsData, EveryFrameKeyTakesAllImages) {
   plain.commands_known = false;
   const auto plain_map = build_map_from_recording(plain, {}, true, "{}");
   EXPECT_TRUE(std::isnan(plain_map.key_images[9].travelled_m));
+}
+
+// map build's mode (issue 24): --mode, else the recording's, else forward; the other mode than
+// the recording's is refused naming it.
+TEST(CeilingMapBuild, ModeComesFromTheRecordingAndAContradictionIsRefused) {
+  using core::NavMode;
+  Recording unknown;
+  unknown.folder = "rec";
+  EXPECT_EQ(map_build_mode(unknown, std::nullopt), NavMode::kForward);
+  EXPECT_EQ(map_build_mode(unknown, NavMode::kCeiling), NavMode::kCeiling);
+  Recording ceiling = unknown;
+  ceiling.setup = RecordingSetup{NavMode::kCeiling, -0.7, RecordedCeiling{2.8, 1.6, 0.0, 0.0}};
+  EXPECT_EQ(map_build_mode(ceiling, std::nullopt), NavMode::kCeiling);
+  EXPECT_EQ(map_build_mode(ceiling, NavMode::kCeiling), NavMode::kCeiling);
+  EXPECT_THROW(map_build_mode(ceiling, NavMode::kForward), std::invalid_argument);
+  Recording forward = unknown;
+  forward.setup = RecordingSetup{NavMode::kForward, 0.0, std::nullopt};
+  EXPECT_EQ(map_build_mode(forward, std::nullopt), NavMode::kForward);
+  try {
+    map_build_mode(forward, NavMode::kCeiling);
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rec was taught in forward mode"), std::string::npos)
+        << e.what();
+  }
+}
+
+// The camera geometry of a ceiling rebuild: the recorded one exactly (the live teach's canonical
+// view), a corrected height with the camera where it was, or for recordings that do not say,
+// Pepper's head geometry under the height the operator gives (else a clear refusal).
+TEST(CeilingMapBuild, SetupIsTheRecordedOneOrNeedsTheCeilingHeight) {
+  const auto camera = core::CameraIntrinsics::pepper_top_vga().scaled_to(320, 240);
+  const CeilingCameraSetup live = ceiling_camera_of_pepper(2.7, camera, -0.65);
+  Recording rec;
+  rec.folder = "rec";
+  rec.version = 2;
+  rec.setup = RecordingSetup{core::NavMode::kCeiling, -0.65, to_recorded(live)};
+  const CeilingCameraSetup same = ceiling_setup_for_build(rec, camera, {});
+  EXPECT_EQ(same.camera.ceiling_above_cam_m, live.camera.ceiling_above_cam_m);  // bit for bit
+  EXPECT_EQ(same.camera.head_pitch_rad, -0.65);
+  EXPECT_EQ(same.cam_in_base_m, live.cam_in_base_m);
+  EXPECT_EQ(same.ceiling_height_m, 2.7);
+  CeilingBuildInputs corrected;
+  corrected.ceiling_height_m = 2.5;
+  const CeilingCameraSetup lower = ceiling_setup_for_build(rec, camera, corrected);
+  EXPECT_NEAR(lower.camera.ceiling_above_cam_m, live.camera.ceiling_above_cam_m - 0.2, 1e-12);
+  EXPECT_EQ(lower.cam_in_base_m, live.cam_in_base_m);
+  corrected.ceiling_height_m = 0.5;  // under the camera
+  EXPECT_THROW(ceiling_setup_for_build(rec, camera, corrected), std::invalid_argument);
+
+  Recording old;
+  old.folder = "old_rec";
+  old.version = 1;
+  try {
+    ceiling_setup_for_build(old, camera, {});
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("old_rec: this recording does not say how high the ceiling was"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("--set robot.ceiling_height_m="), std::string::npos) << what;
+  }
+  CeilingBuildInputs given;
+  given.ceiling_height_m = 2.7;
+  given.head_pitch_rad = -0.65;
+  const CeilingCameraSetup pepper = ceiling_setup_for_build(old, camera, given);
+  EXPECT_EQ(pepper.camera.ceiling_above_cam_m, live.camera.ceiling_above_cam_m);
+  // A real robot's teach recorded its configuration: its height and head pitch are taken.
+  old.config = {{"robot", {{"ceiling_height_m", 2.7}, {"ceiling_head_pitch_rad", -0.65}}}};
+  const CeilingCameraSetup from_config = ceiling_setup_for_build(old, camera, {});
+  EXPECT_EQ(from_config.camera.ceiling_above_cam_m, live.camera.ceiling_above_cam_m);
+  EXPECT_EQ(from_config.camera.head_pitch_rad, -0.65);
 }
 
 }  // namespace

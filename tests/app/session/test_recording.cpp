@@ -99,6 +99,94 @@ TEST(Recording, WrongVersionAndMissingFrameAreClearErrors) {
   }
 }
 
+// Format version 2 (issue 24): a teach says how it ran, so that map build rebuilds its map.
+TEST(Recording, TeachSetupRoundTripsAndVersionOneHasNone) {
+  test::TempDir tmp;
+  const auto camera = core::CameraIntrinsics::pepper_top_vga().scaled_to(64, 48);
+  RecordingSetup ceiling{core::NavMode::kCeiling, -0.7, RecordedCeiling{2.8, 1.63, -0.077, 0.001}};
+  {
+    RecordingWriter writer(tmp.path() / "ceiling", camera, "mock:test", "{}", ceiling);
+    writer.append(make_frame(0), 0, 0);
+  }
+  const Recording rec = read_recording(tmp.path() / "ceiling", std::nullopt);
+  EXPECT_EQ(rec.version, 2);
+  ASSERT_TRUE(rec.setup.has_value());
+  EXPECT_EQ(rec.setup->mode, core::NavMode::kCeiling);
+  EXPECT_EQ(rec.setup->head_pitch_rad, -0.7);
+  ASSERT_TRUE(rec.setup->ceiling.has_value());
+  EXPECT_EQ(rec.setup->ceiling->height_m, 2.8);  // exact: JSON keeps every digit
+  EXPECT_EQ(rec.setup->ceiling->above_camera_m, 1.63);
+  EXPECT_EQ(rec.setup->ceiling->cam_in_base_x_m, -0.077);
+  EXPECT_EQ(rec.setup->ceiling->cam_in_base_y_m, 0.001);
+  {
+    RecordingWriter writer(tmp.path() / "forward", camera, "mock:test", "{}",
+                           RecordingSetup{core::NavMode::kForward, 0.0, std::nullopt});
+    writer.append(make_frame(0), 0, 0);
+  }
+  const Recording fwd = read_recording(tmp.path() / "forward", std::nullopt);
+  ASSERT_TRUE(fwd.setup.has_value());
+  EXPECT_EQ(fwd.setup->mode, core::NavMode::kForward);
+  EXPECT_FALSE(fwd.setup->ceiling.has_value());
+  {  // replay's recordings say nothing
+    RecordingWriter writer(tmp.path() / "replay", camera, "mock:test");
+    writer.append(make_frame(0), 0, 0);
+  }
+  EXPECT_FALSE(read_recording(tmp.path() / "replay", std::nullopt).setup.has_value());
+  // Version 1, written before issue 24: read, without a setup.
+  {
+    std::ofstream out(tmp.path() / "replay" / "recording.json", std::ios::trunc);
+    out << R"({"format":"pepper-recording","version":1,"mode":"ceiling",)"
+        << R"("camera":{"width_px":64,"height_px":48,"fx_px":60,"fy_px":60,"cx_px":32,)"
+        << R"("cy_px":24},"config":{"robot":{"ceiling_height_m":2.5}}})";
+  }
+  const Recording v1 = read_recording(tmp.path() / "replay", std::nullopt);
+  EXPECT_EQ(v1.version, 1);
+  EXPECT_FALSE(v1.setup.has_value());
+  EXPECT_EQ(v1.config["robot"]["ceiling_height_m"], 2.5);
+  // A setup that disagrees with itself is not written.
+  EXPECT_THROW(RecordingWriter(tmp.path() / "bad", camera, "x", "{}",
+                               RecordingSetup{core::NavMode::kCeiling, -0.7, std::nullopt}),
+               RecordingError);
+}
+
+TEST(Recording, MalformedSetupIsAClearError) {
+  test::TempDir tmp;
+  const auto folder = tmp.path() / "rec";
+  {
+    RecordingWriter writer(folder, core::CameraIntrinsics::pepper_top_vga(), "x", "{}",
+                           RecordingSetup{core::NavMode::kCeiling, -0.7,
+                                          RecordedCeiling{2.8, 1.6, 0.0, 0.0}});
+    writer.append(make_frame(0), 0, 0);
+  }
+  std::ifstream in(folder / "recording.json");
+  const nlohmann::json good = nlohmann::json::parse(in);
+  const auto refused_with = [&](nlohmann::json m, const std::string& part) {
+    std::ofstream(folder / "recording.json", std::ios::trunc) << m.dump();
+    try {
+      read_recording(folder, std::nullopt);
+      ADD_FAILURE() << "read: " << m.dump();
+    } catch (const RecordingError& e) {
+      EXPECT_NE(std::string(e.what()).find("recording.json: "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
+  };
+  nlohmann::json m = good;
+  m["mode"] = "up";
+  refused_with(m, "mode \"up\"");
+  m = good;
+  m.erase("ceiling");
+  refused_with(m, "mode ceiling needs");
+  m = good;
+  m["ceiling"]["above_camera_m"] = -1.0;
+  refused_with(m, "above_camera_m must be > 0");
+  m = good;
+  m["ceiling"]["camera_in_base_m"].erase("x_m");
+  refused_with(m, "finite numbers");
+  m = good;
+  m.erase("head_pitch_rad");
+  refused_with(m, "head_pitch_rad");
+}
+
 TEST(Recording, PlainImageFolderNeedsCameraAndIsReadInNameOrder) {
   test::TempDir tmp;
   cv::Mat colour(30, 40, CV_8UC3, cv::Scalar(0, 0, 200));
