@@ -145,6 +145,7 @@ TeachResult teach_tour(const std::shared_ptr<const sim::World>& world,
   out.map = core::memory::load_map(out.map_dir, load);
   out.path_m = taught.path_m;
   out.key_m = taught.key_m;
+  out.key_yaw_rad = taught.key_yaw_rad;
   out.frames = static_cast<int>(taught.frames_recorded);
   out.length_m = Polyline(out.path_m).length_m();
   out.wall_s = seconds_since(t0);
@@ -424,9 +425,13 @@ RunResult replay_run(const TeachResult& teach,
                        ".jsonl");
     trace.open(file);
     if (!trace) throw std::runtime_error(file.string() + ": cannot open for writing");
-    // First line: where each key image was taught (its ground-truth base position).
+    // First line: where each key image was taught (its ground-truth base pose).
     nlohmann::json keys = nlohmann::json::array();
-    for (const auto& p : teach.key_m) keys.push_back({{"x_m", p.x()}, {"y_m", p.y()}});
+    for (size_t i = 0; i < teach.key_m.size(); ++i) {
+      nlohmann::json k = {{"x_m", teach.key_m[i].x()}, {"y_m", teach.key_m[i].y()}};
+      if (i < teach.key_yaw_rad.size()) k["yaw_rad"] = teach.key_yaw_rad[i];
+      keys.push_back(std::move(k));
+    }
     trace << nlohmann::json{{"taught_key_images", keys}}.dump() << '\n';
   }
 

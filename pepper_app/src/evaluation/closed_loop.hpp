@@ -120,6 +120,7 @@ struct TeachResult {
   std::filesystem::path map_dir;
   std::vector<Eigen::Vector2d> path_m;       ///< ground-truth base positions, one per frame
   std::vector<Eigen::Vector2d> key_m;        ///< ground-truth base positions of the key images
+  std::vector<double> key_yaw_rad;           ///< ... and their ground-truth base yaws
   double length_m = 0.0;                     ///< length of path_m
   int frames = 0;
   double wall_s = 0.0;                       ///< wall-clock time of the teach

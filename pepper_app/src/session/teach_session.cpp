@@ -315,12 +315,14 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       // Distance shown and limited (max_distance_m): ground truth on the mock robot, else the
       // map's own measure.
       std::optional<Eigen::Vector2d> pos;
+      double yaw_rad = 0.0;  // with pos: the ground-truth base yaw
       if (robot.mock) {
         const auto gt = robot.mock->ground_truth();
         if (gt.collision) {
           throw std::runtime_error("the simulated robot collided with " + gt.collision->what);
         }
         pos = Eigen::Vector2d(gt.base.x_m, gt.base.y_m);
+        yaw_rad = gt.base.yaw_rad;
         if (prev_pos) result.distance_m += (*pos - *prev_pos).norm();
         prev_pos = pos;
       } else {
@@ -341,7 +343,10 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       if (recording && ceiling_teacher) {
         const core::ceiling::MosaicFrameResult step =
             ceiling_teacher->add_frame(*frame, travelled_m);
-        if (pos) result.path_m.push_back(*pos);
+        if (pos) {
+          result.path_m.push_back(*pos);
+          result.path_yaw_rad.push_back(yaw_rad);
+        }
         // Say so when the ceiling is lost, once per loss, so that the operator can drive back
         // while the teach is still running (the builder re-localises when it sees mapped
         // ceiling again, mosaic_builder.hpp).
@@ -387,12 +392,18 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         link.publish_samples(sample);
       } else if (recording) {
         const core::mapping::TeachStep step = teacher->add_frame(*frame, travelled_m);
-        if (pos) result.path_m.push_back(*pos);
+        if (pos) {
+          result.path_m.push_back(*pos);
+          result.path_yaw_rad.push_back(yaw_rad);
+        }
         // The first frame is always key image 0 (the teacher does not report it as a new one).
         if (step.new_key_frame || step.frame_number == 0) {
           const int k = step.key_image_count - 1;
           // The selector may pick the previous frame: take the position of the frame it chose.
-          if (pos) result.key_m.push_back(result.path_m.at(step.new_key_frame.value_or(0)));
+          if (pos) {
+            result.key_m.push_back(result.path_m.at(step.new_key_frame.value_or(0)));
+            result.key_yaw_rad.push_back(result.path_yaw_rad.at(step.new_key_frame.value_or(0)));
+          }
           nlohmann::json key = {{"index", k}, {"distance_m", travelled_m}, {"weak", false}};
           if (step.new_key_rule) {
             key["rule"] = core::mapping::to_string(*step.new_key_rule);
@@ -575,6 +586,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         // path_m has one position per taught frame, as the relay images' frame indices count.
         for (const auto& r : cm.tour.relay_images) {
           result.key_m.push_back(result.path_m.at(static_cast<size_t>(r.frame)));
+          result.key_yaw_rad.push_back(result.path_yaw_rad.at(static_cast<size_t>(r.frame)));
         }
         try {
           save_taught_path(options.map_dir,
@@ -611,6 +623,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         // finish() makes the last frame the final key image when the selector had not.
         if (result.key_m.size() < map.key_images.size()) {
           result.key_m.push_back(result.path_m.back());
+          result.key_yaw_rad.push_back(result.path_yaw_rad.back());
         }
         try {
           save_taught_path(options.map_dir,

@@ -101,6 +101,8 @@ struct TeachResult {
   std::vector<std::string> warnings;
   std::vector<Eigen::Vector2d> path_m;  ///< mock only: ground-truth base positions per frame
   std::vector<Eigen::Vector2d> key_m;   ///< mock only: base positions of the key images
+  std::vector<double> path_yaw_rad;     ///< mock only: ground-truth base yaw per frame
+  std::vector<double> key_yaw_rad;      ///< mock only: base yaw of the key images
   bool ok() const { return outcome == "finished" && map_saved; }
 };
 

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iostream>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <memory>
@@ -123,8 +124,23 @@ TEST(ClosedLoop, ShortTourWithOneTurnConvergesFromPerturbedStarts) {
   std::ifstream trace_in(trace);
   ASSERT_TRUE(trace_in) << trace;
   int trace_lines = 0;
-  for (std::string line; std::getline(trace_in, line);) ++trace_lines;
+  std::string header;
+  for (std::string line; std::getline(trace_in, line);) {
+    if (trace_lines++ == 0) header = line;
+  }
   EXPECT_GT(trace_lines, 10);
+  // The header: each key image's taught ground-truth pose, yaw included (the teach's truth).
+  const nlohmann::json keys = nlohmann::json::parse(header).at("taught_key_images");
+  ASSERT_EQ(keys.size(), teach.key_m.size());
+  ASSERT_EQ(teach.key_yaw_rad.size(), teach.key_m.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    EXPECT_DOUBLE_EQ(keys[i].at("x_m").get<double>(), teach.key_m[i].x());
+    EXPECT_DOUBLE_EQ(keys[i].at("yaw_rad").get<double>(), teach.key_yaw_rad[i]);
+  }
+  // The small room's tour turns: the taught yaws are not all the start's.
+  EXPECT_GT(std::abs(std::remainder(teach.key_yaw_rad.back() - teach.key_yaw_rad.front(),
+                                    2.0 * M_PI)),
+            0.1);
   ASSERT_EQ(again.runs.size(), 1u);
   EXPECT_EQ(again.runs[0].index, ev.runs[1].index);
   EXPECT_DOUBLE_EQ(again.runs[0].start_x_m, ev.runs[1].start_x_m);
