@@ -308,6 +308,22 @@ TEST(CeilingMosaicSim, TheChainedDriftOverTheTourIsBounded) {
   EXPECT_LT(max_yaw, 2.0 * M_PI / 180.0);
 }
 
+// `other`, fed the tour's observations, built the tour's mosaic landmark for landmark and
+// posed every frame where the tour's builder did.
+void expect_built_as_the_tour(const MosaicBuilder& other, const Taught& t) {
+  const Mosaic m = other.mosaic();
+  ASSERT_EQ(m.landmarks.size(), t.mosaic.landmarks.size());
+  for (size_t i = 0; i < m.landmarks.size(); ++i) {
+    EXPECT_EQ(m.landmarks[i].id, t.mosaic.landmarks[i].id);
+    EXPECT_EQ(m.landmarks[i].position_m, t.mosaic.landmarks[i].position_m);
+    EXPECT_EQ(m.landmarks[i].observations, t.mosaic.landmarks[i].observations);
+  }
+  for (size_t k = 0; k < t.observations.size(); ++k) {
+    EXPECT_EQ(other.frames()[k].T_mosaic_base.x_m, t.builder.frames()[k].T_mosaic_base.x_m);
+    EXPECT_EQ(other.frames()[k].T_mosaic_base.y_m, t.builder.frames()[k].T_mosaic_base.y_m);
+  }
+}
+
 // The tour does not come back under ceiling it saw long before: loop closure (on by default)
 // finds nothing to close and the mosaic is the one built without it, landmark for landmark.
 TEST(CeilingMosaicSim, TheOpenTourIsBuiltAsWithoutLoopClosure) {
@@ -318,17 +334,7 @@ TEST(CeilingMosaicSim, TheOpenTourIsBuiltAsWithoutLoopClosure) {
   options.loop.enabled = false;
   MosaicBuilder without(options);
   for (const CeilingObservation& o : t.observations) without.add_frame(o);
-  const Mosaic m = without.mosaic();
-  ASSERT_EQ(m.landmarks.size(), t.mosaic.landmarks.size());
-  for (size_t i = 0; i < m.landmarks.size(); ++i) {
-    EXPECT_EQ(m.landmarks[i].id, t.mosaic.landmarks[i].id);
-    EXPECT_EQ(m.landmarks[i].position_m, t.mosaic.landmarks[i].position_m);
-    EXPECT_EQ(m.landmarks[i].observations, t.mosaic.landmarks[i].observations);
-  }
-  for (size_t k = 0; k < t.observations.size(); ++k) {
-    EXPECT_EQ(without.frames()[k].T_mosaic_base.x_m, t.builder.frames()[k].T_mosaic_base.x_m);
-    EXPECT_EQ(without.frames()[k].T_mosaic_base.y_m, t.builder.frames()[k].T_mosaic_base.y_m);
-  }
+  expect_built_as_the_tour(without, t);
 }
 
 // The tour never loses the ceiling: re-localisation (on by default) never runs and the mosaic is
@@ -342,17 +348,7 @@ TEST(CeilingMosaicSim, TheOpenTourIsBuiltAsWithoutRelocalisation) {
   options.relocalisation.enabled = false;
   MosaicBuilder without(options);
   for (const CeilingObservation& o : t.observations) without.add_frame(o);
-  const Mosaic m = without.mosaic();
-  ASSERT_EQ(m.landmarks.size(), t.mosaic.landmarks.size());
-  for (size_t i = 0; i < m.landmarks.size(); ++i) {
-    EXPECT_EQ(m.landmarks[i].id, t.mosaic.landmarks[i].id);
-    EXPECT_EQ(m.landmarks[i].position_m, t.mosaic.landmarks[i].position_m);
-    EXPECT_EQ(m.landmarks[i].observations, t.mosaic.landmarks[i].observations);
-  }
-  for (size_t k = 0; k < t.observations.size(); ++k) {
-    EXPECT_EQ(without.frames()[k].T_mosaic_base.x_m, t.builder.frames()[k].T_mosaic_base.x_m);
-    EXPECT_EQ(without.frames()[k].T_mosaic_base.y_m, t.builder.frames()[k].T_mosaic_base.y_m);
-  }
+  expect_built_as_the_tour(without, t);
 }
 
 // Re-localisation after a loss (docs/method/ceiling.md, "Re-localising after a loss") on the

@@ -8,9 +8,12 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/ceiling/mosaic.hpp"
+#include "core/ceiling/mosaic_builder.hpp"
 #include "core/ceiling/observation.hpp"
 #include "core/ceiling/planar_rigid.hpp"
 
@@ -33,6 +36,16 @@ inline SyntheticCeiling make_synthetic_ceiling(uint32_t seed, double x0_m, int n
   c.descriptors.create(static_cast<int>(c.points_world.size()), kMosaicDescriptorBytes, CV_8U);
   cv::randu(c.descriptors, 0, 256);
   return c;
+}
+
+// What a MosaicBuilder made with `o` throws (std::invalid_argument's message), or "".
+inline std::string builder_error(const MosaicBuilderOptions& o) {
+  try {
+    MosaicBuilder b(o);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return {};
 }
 
 inline cv::Mat random_descriptor(std::mt19937& rng) {

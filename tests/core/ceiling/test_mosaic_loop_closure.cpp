@@ -322,14 +322,7 @@ TEST(MosaicLoopClosure, DegenerateTeachesDoNotBreakIt) {
 }
 
 TEST(MosaicLoopClosure, RefusesBadOptionsNamingTheField) {
-  auto message = [](const MosaicBuilderOptions& o) {
-    try {
-      MosaicBuilder b(o);
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto message = [](const MosaicBuilderOptions& o) { return test_support::builder_error(o); };
   MosaicBuilderOptions o;
   o.loop.min_gap_m = 0.0;
   EXPECT_NE(message(o).find("loop.min_gap_m"), std::string::npos);

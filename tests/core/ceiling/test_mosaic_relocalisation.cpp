@@ -471,14 +471,7 @@ TEST(MosaicRelocalisation, EarlyAndEmptyLossesDoNotBreakIt) {
 }
 
 TEST(MosaicRelocalisation, RefusesBadOptionsNamingTheField) {
-  auto message = [](const MosaicBuilderOptions& o) {
-    try {
-      MosaicBuilder b(o);
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
+  const auto message = [](const MosaicBuilderOptions& o) { return test_support::builder_error(o); };
   MosaicBuilderOptions o;
   o.relocalisation.every_frames = 0;
   EXPECT_NE(message(o).find("relocalisation.every_frames"), std::string::npos);
