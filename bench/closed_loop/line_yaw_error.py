@@ -11,8 +11,11 @@ frames, the RMS and max over segments of the per-segment mean error, and the RMS
 about their segment's mean (docs/method/navigator.md, "Right fixes refused after a blind turn").
 
 Usage: bench/closed_loop/line_yaw_error.py TRACE.jsonl... [--bins B1,B2,...] [--worst N]
+                                            [--frames]
   --bins     upper edges of the turn bins in rad (0.05,0.15,0.3; a last bin takes the rest)
   --worst N  also list the N segments with the largest mean error (trace, IN, turn, frames)
+  --frames   also the frames' error RMS (mrad) and count by the truth's distance from IN's
+             taught position (0.25, 0.5 m) and its yaw relative to IN (0.1, 0.3 rad)
 Example:
   build/pepper_app/pepper_app evaluate --world worlds/robotics_room.yaml --starts 5 --run 1 \\
       --size 640x480 --trace /tmp/tr
@@ -41,12 +44,14 @@ def load_with_yaws(path):
     keys = rows[0]['taught_key_images']
     if not keys or any('yaw_rad' not in k for k in keys):
         sys.exit(f'{path}: the header has no taught yaws (a trace of an older build?)')
-    return [k['yaw_rad'] for k in keys], [r for r in rows[1:] if 'telemetry' in r and 'gt' in r]
+    return keys, [r for r in rows[1:] if 'telemetry' in r and 'gt' in r]
 
 
-def segments(path):
-    """{(path, IP, IN): [line yaw error rad, ...]} and each segment's taught turn."""
-    yaws, rows = load_with_yaws(path)
+def segments(path, frames=None):
+    """{(path, IP, IN): [line yaw error rad, ...]} and each segment's taught turn; `frames`, a
+    list, gets (distance from IN m, |yaw relative to IN| rad, error rad) per frame."""
+    keys, rows = load_with_yaws(path)
+    yaws = [k['yaw_rad'] for k in keys]
     errs = collections.defaultdict(list)
     turn = {}
     for r in rows:
@@ -58,7 +63,32 @@ def segments(path):
         key = (path, ip, nxt)
         errs[key].append(wrap(ly - truth))
         turn[key] = abs(wrap(yaws[nxt] - yaws[ip]))
+        if frames is not None:
+            d = math.hypot(gt['x_m'] - keys[nxt]['x_m'], gt['y_m'] - keys[nxt]['y_m'])
+            frames.append((d, abs(truth), wrap(ly - truth)))
     return errs, turn
+
+
+def frame_grid(frames):
+    """Prints the frames' error RMS and count by distance from IN and relative yaw."""
+    d_edges, y_edges = [0.25, 0.5], [0.1, 0.3]
+
+    def cell(v, edges):
+        return next((i for i, hi in enumerate(edges) if v < hi), len(edges))
+
+    grid = collections.defaultdict(list)
+    for d, y, e in frames:
+        grid[(cell(d, d_edges), cell(y, y_edges))].append(e)
+    print('frames by distance from IN (rows, m) and |yaw relative to IN| (columns, rad): '
+          'error RMS mrad / frames')
+    print('distance m    yaw 0 - 0.1       0.1 - 0.3         0.3 -')
+    for i, label in enumerate(['0 - 0.25  ', '0.25 - 0.5', '0.5 -     ']):
+        cells = []
+        for j in range(3):
+            v = grid.get((i, j), [])
+            rms = math.sqrt(sum(x * x for x in v) / len(v)) * 1000 if v else float('nan')
+            cells.append(f'{rms:7.1f} / {len(v):5d}')
+        print(f'{label}  ' + '   '.join(cells))
 
 
 def main():
@@ -66,6 +96,7 @@ def main():
     ap.add_argument('traces', nargs='+')
     ap.add_argument('--bins', default='0.05,0.15,0.3')
     ap.add_argument('--worst', type=int, default=0)
+    ap.add_argument('--frames', action='store_true')
     a = ap.parse_args()
     try:
         edges = [float(x) for x in a.bins.split(',')]
@@ -73,9 +104,9 @@ def main():
         sys.exit(f'--bins {a.bins}: give increasing angles in rad, e.g. 0.05,0.15,0.3')
     if not edges or any(e <= 0 for e in edges) or edges != sorted(edges):
         sys.exit(f'--bins {a.bins}: give increasing angles in rad, e.g. 0.05,0.15,0.3')
-    errs, turn = {}, {}
+    errs, turn, per_frame = {}, {}, []
     for path in a.traces:
-        e, t = segments(path)
+        e, t = segments(path, per_frame)
         errs.update(e)
         turn.update(t)
     if not errs:
@@ -106,6 +137,8 @@ def main():
             e = errs[(path, ip, nxt)]
             print(f'  {path} IN {nxt}: mean {1000 * sum(e) / len(e):+.1f} mrad over {len(e)} '
                   f'frames, taught turn {turn[(path, ip, nxt)]:.3f} rad')
+    if a.frames:
+        frame_grid(per_frame)
 
 
 if __name__ == '__main__':
