@@ -1,8 +1,14 @@
 #include "session/ceiling_teach.hpp"
 
+#include <unistd.h>
+
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
 #include <stdexcept>
+#include <system_error>
 
 #include "core/ceiling/landmarks.hpp"
 #include "core/ceiling/observation.hpp"
@@ -86,6 +92,123 @@ CeilingCameraSetup ceiling_setup_of_recorded(const RecordedCeiling& recorded,
                                   std::to_string(cam_height_m) + " m above the floor)");
 }
 
+// Why a store on disk (issue 24) and not a bounded window of frames in RAM: which frames become
+// relay images is only known at finish(). select_relay_images runs over the builder's KEPT
+// sightings (MosaicBuilder::kept_sightings): a landmark counts in every frame that saw it once
+// it has min_observations sightings, and any later frame can bring it there (the tour passing
+// under that ceiling again, a loop), so a late frame can change which early frames satisfy the
+// relay conditions; no window of frames is provably enough. Nor the teach's recording
+// (RecordingWriter), though it writes the same PNGs: it is optional (a teach without
+// --recording has none), `map build` feeds the teacher from a recording it only reads, and the
+// teacher would depend on another component's file numbering and on files the operator may
+// move or delete during the teach. A store of our own costs one more PNG write per frame when
+// the teach also records (3.7 ms at VGA measured in tests/app/session/
+// test_ceiling_teach_memory.cpp) and its disk space until the teacher goes.
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string store_error(const fs::path& path, const std::string& what) {
+  return "ceiling teach: frame store: " + path.string() + ": " + what;
+}
+
+fs::path store_parent(const fs::path& parent) {
+  if (!parent.empty()) return parent;
+  try {
+    return fs::temp_directory_path();
+  } catch (const fs::filesystem_error& e) {
+    throw std::runtime_error(
+        "ceiling teach: frame store: no temporary folder for the teach's frames (" +
+        std::string(e.what()) + "): set TMPDIR to a writable folder with room");
+  }
+}
+
+}  // namespace
+
+TeachFrameStore::TeachFrameStore(const fs::path& parent) {
+  const fs::path where = store_parent(parent);
+  static std::atomic<uint64_t> counter{0};
+  std::random_device entropy;
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    char name[96];
+    std::snprintf(
+        name, sizeof name, "pepper_ceiling_teach_%ld_%llu_%08x", static_cast<long>(::getpid()),
+        static_cast<unsigned long long>(counter.fetch_add(1)), static_cast<unsigned>(entropy()));
+    const fs::path candidate = where / name;
+    std::error_code ec;
+    // create_directory (not _directories): the parent must exist; false when the name is taken.
+    if (fs::create_directory(candidate, ec)) {
+      dir_ = candidate;
+      return;
+    }
+    if (ec) {
+      throw std::runtime_error(store_error(
+          candidate, "cannot create the folder for the teach's frames (" + ec.message() +
+                         "): set TMPDIR to a writable folder with room"));
+    }
+  }
+  throw std::runtime_error(store_error(where, "no free folder name for the teach's frames"));
+}
+
+TeachFrameStore::~TeachFrameStore() {
+  std::error_code ec;  // never throws: a folder already gone is fine
+  fs::remove_all(dir_, ec);
+}
+
+fs::path TeachFrameStore::file_of(size_t index) const {
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%08zu.png", index);
+  return dir_ / name;
+}
+
+void TeachFrameStore::put(size_t index, const cv::Mat& gray) {
+  const fs::path file = file_of(index);
+  if (gray.empty() || gray.type() != CV_8UC1) {
+    throw std::invalid_argument(store_error(file, "a frame must be a non-empty CV_8UC1 image"));
+  }
+  if (size_.empty()) size_ = gray.size();
+  if (gray.size() != size_) {
+    throw std::invalid_argument(store_error(file, "a frame of another size than the first"));
+  }
+  // PNG: lossless, so finish() extracts the key images' features from the very pixels taught.
+  bool written = false;
+  std::string why = "cv::imwrite failed (folder gone? disk full?)";
+  try {
+    written = cv::imwrite(file.string(), gray);
+  } catch (const cv::Exception& e) {
+    why = e.what();
+  }
+  std::error_code ec;
+  const uintmax_t bytes = written ? fs::file_size(file, ec) : 0;
+  if (!written || ec) {
+    throw std::runtime_error(store_error(file, "cannot write the teach frame: " + why));
+  }
+  if (file_bytes_.size() <= index) file_bytes_.resize(index + 1, 0);
+  bytes_on_disk_ += bytes - file_bytes_[index];
+  file_bytes_[index] = static_cast<uint32_t>(bytes);
+}
+
+cv::Mat TeachFrameStore::get(size_t index) const {
+  const fs::path file = file_of(index);
+  std::error_code ec;
+  if (!fs::exists(file, ec)) {
+    throw std::runtime_error(store_error(file, "the teach frame is missing (folder removed?)"));
+  }
+  cv::Mat image;
+  try {
+    image = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(store_error(file, std::string("cannot read it: ") + e.what()));
+  }
+  if (image.empty()) {
+    throw std::runtime_error(store_error(file, "cannot read the teach frame (damaged?)"));
+  }
+  if (image.type() != CV_8UC1 || image.size() != size_) {
+    throw std::runtime_error(store_error(file, "not the teach frame written there"));
+  }
+  return image;
+}
+
 namespace {
 
 cc::MosaicBuilderOptions builder_options(const CeilingTeachOptions& o) {
@@ -126,6 +249,7 @@ CeilingTeacher::CeilingTeacher(const CeilingCameraSetup& setup,
       builder_(builder_options(options)) {
   options_.relay.check();
   options_.height_check.check();
+  store_ = std::make_unique<TeachFrameStore>(options_.frame_store_parent);
 }
 
 cc::MosaicFrameResult CeilingTeacher::add_frame(const core::Frame& frame, double travelled_m) {
@@ -133,10 +257,12 @@ cc::MosaicFrameResult CeilingTeacher::add_frame(const core::Frame& frame, double
   const cv::Mat canonical = view_->warp(frame.gray, &seen);
   const cc::CeilingObservation obs =
       cc::observe(*view_, setup_.cam_in_base_m, cc::extract_landmarks(canonical, seen));
+  // The image to disk now (the relay images are chosen at the end), before the builder's step:
+  // a failed write leaves the teacher as it was, so the frames so far still make a map.
+  store_->put(frames_.size(), frame.gray);
   cc::MosaicFrameResult r = builder_.add_frame(obs);
   if (!r.localised) ++unlocalised_;
-  // Cloned: the relay images are chosen at the end, and a bridge may reuse its buffers.
-  frames_.push_back({frame.gray.clone(), frame.t_ns, travelled_m, frame.odom});
+  frames_.push_back({frame.t_ns, travelled_m, frame.odom});
   return r;
 }
 
@@ -166,7 +292,7 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
     key.t_ns = k.t_ns;
     key.travelled_m = k.travelled_m;
     key.odom = k.odom;
-    key.features = extractor_.extract(k.gray, core::features::kPartsAll);
+    key.features = extractor_.extract(store_->get(f), core::features::kPartsAll);
     out.map.key_images.push_back(std::move(key));
 
     cc::RelayImageRecord rec;

@@ -2,11 +2,15 @@
 // Ceiling-mode teach (issue 24; docs/method/ceiling.md): the part of the teach session that runs
 // where the forward key-image selector runs in forward mode. Per frame: the canonical ceiling
 // view (CanonicalView::warp), its landmarks (extract_landmarks, observe) and one MosaicBuilder
-// step; the frame's grey image is kept (cloned: 77 kB at QVGA) because the relay images are only
-// chosen at the end, when the builder knows which landmarks it kept. finish() picks the relay
-// images (select_relay_images) and makes a CeilingMap: a VisualMemory in ceiling mode whose key
-// images are the relay images (grey image and features, so every map tool reads it), the mosaic
-// and the CeilingTour (relay poses and landmarks, breaks, drift indicators).
+// step. The relay images are only chosen at the end, when the builder knows which landmarks it
+// kept, so every frame's grey image is needed until then: it goes to disk as it comes (a
+// TeachFrameStore, lossless PNG in a temporary folder the teacher owns), and RAM keeps per frame
+// only its stamp, distance and odometry (docs/method/ceiling.md "Teach memory"; at VGA, 15 fps
+// the images alone were 2.7 GB per 10 minutes). finish() picks the relay images
+// (select_relay_images), reads back only those, and makes a CeilingMap: a VisualMemory in
+// ceiling mode whose key images are the relay images (grey image and features, so every map tool
+// reads it), the mosaic and the CeilingTour (relay poses and landmarks, breaks, drift
+// indicators).
 //
 // The camera geometry (ceiling height above the optical centre, the optical centre on the base)
 // comes from the simulated robot (ceiling_camera_of_mock) or, on a real Pepper, from its head
@@ -16,7 +20,9 @@
 // wrong height scales every distance of the mosaic, and finish() says so, it never changes it.
 // Frames and units: core/ceiling (base frame x forward, y left, metres; mosaic frame = base frame
 // of the first frame). Errors: bad options throw std::invalid_argument; finish() throws
-// std::runtime_error when the tour gives no usable mosaic (fewer than 2 frames or no landmark).
+// std::runtime_error when the tour gives no usable mosaic (fewer than 2 frames or no landmark),
+// and the constructor, add_frame() and finish() throw std::runtime_error naming the path when the
+// frame store fails (folder not creatable, image not written, image missing or damaged).
 // Not thread-safe (one teach).
 
 #include <cstdint>
@@ -88,12 +94,46 @@ struct CeilingTeachOptions {
   core::ceiling::MosaicBuilderOptions builder;  ///< its px_per_m is replaced by the one above
   core::ceiling::RelayOptions relay;
   core::ceiling::HeightCheckOptions height_check;
+  /// Where the teach keeps its frames' images until the teacher goes (a fresh folder inside
+  /// it, see TeachFrameStore); empty: the system's temporary folder ($TMPDIR).
+  std::filesystem::path frame_store_parent;
 };
 
 /// The warning for a height check that disagrees with the configured height (nullopt when it
 /// agrees or gave no estimate): the measured height, by how much every distance of the map is
 /// off, and how to re-teach (--set robot.ceiling_height_m=X). For the console and `map info`.
 std::optional<std::string> ceiling_height_warning(const core::ceiling::HeightCheck& check);
+
+/// The teach frames' grey images on disk while a ceiling teach runs (CeilingTeacher): a fresh
+/// folder (`pepper_ceiling_teach_<pid>_<n>_<random>`) in `parent`, or in the system's temporary
+/// folder (std::filesystem::temp_directory_path(), i.e. $TMPDIR) when `parent` is empty, holding
+/// one lossless PNG per frame (`frame_00000012.png`); removed with everything in it when the
+/// store is destroyed (also when a teach or finish() throws; not after a SIGKILL: such folders
+/// stay in the temporary folder). Errors: std::runtime_error naming the path.
+class TeachFrameStore {
+ public:
+  explicit TeachFrameStore(const std::filesystem::path& parent = {});
+  ~TeachFrameStore();
+  TeachFrameStore(const TeachFrameStore&) = delete;
+  TeachFrameStore& operator=(const TeachFrameStore&) = delete;
+
+  /// Writes frame `index`'s image now (nothing is buffered); replaces an earlier one of that
+  /// index. `gray`: CV_8UC1, the size of every other frame of the store.
+  void put(size_t index, const cv::Mat& gray);
+  /// Reads frame `index`'s image back: the pixels put() got, bit for bit.
+  cv::Mat get(size_t index) const;
+
+  const std::filesystem::path& dir() const { return dir_; }
+  std::filesystem::path file_of(size_t index) const;
+  /// The PNG bytes written so far (the last write of each index), for the memory notes.
+  uint64_t bytes_on_disk() const { return bytes_on_disk_; }
+
+ private:
+  std::filesystem::path dir_;
+  cv::Size size_;                     ///< of the first image put; every image has it
+  std::vector<uint32_t> file_bytes_;  ///< per index, to keep bytes_on_disk() right on rewrites
+  uint64_t bytes_on_disk_ = 0;
+};
 
 /// A ceiling-mode map: the three parts saved in one map folder (ceiling_map.hpp).
 struct CeilingMap {
@@ -110,24 +150,36 @@ class CeilingTeacher {
                  const core::features::FeatureExtractorOptions& extractor,
                  CeilingTeachOptions options = {});
 
-  /// One taught frame; travelled_m as the forward teacher takes it (drive_odometer.hpp).
+  /// One taught frame; travelled_m as the forward teacher takes it (drive_odometer.hpp). Its
+  /// image is written to the frame store before the mosaic builder's step: when that write
+  /// fails (std::runtime_error naming the file) the teacher is as it was before the call.
   core::ceiling::MosaicFrameResult add_frame(
       const core::Frame& frame, double travelled_m = std::numeric_limits<double>::quiet_NaN());
 
   int64_t frames_seen() const { return static_cast<int64_t>(frames_.size()); }
+  /// RAM the teacher's own per-frame records take (their vector's capacity): a frame's stamp,
+  /// distance and odometry, no image (each one is in the frame store on disk once add_frame()
+  /// returns). The mosaic builder's records (landmarks, sightings, poses) are not counted.
+  size_t frame_records_bytes() const { return frames_.capacity() * sizeof(Kept); }
+  static constexpr size_t frame_record_bytes() { return sizeof(Kept); }
+  /// The folder holding the frames' images until the teacher is destroyed.
+  const std::filesystem::path& frame_store_dir() const { return store_->dir(); }
+  uint64_t frame_store_bytes() const { return store_->bytes_on_disk(); }
   int64_t unlocalised_frames() const { return unlocalised_; }
   /// The mosaic builder's loop closures so far (docs/method/ceiling.md "Closing a loop").
   const std::vector<core::ceiling::LoopClosure>& loop_closures() const {
     return builder_.loop_closures();
   }
 
-  /// Chooses the relay images and builds the map. Throws std::runtime_error when fewer than 2
-  /// frames were taught or the mosaic kept no landmark.
+  /// Chooses the relay images and builds the map, reading the relay images back from the frame
+  /// store (which stays until the teacher is destroyed). Throws std::runtime_error when fewer
+  /// than 2 frames were taught, the mosaic kept no landmark, or a relay image is missing or
+  /// damaged on disk (naming its file).
   CeilingMap finish(const std::string& parameters_json = "{}") const;
 
  private:
+  // What finish() needs of a frame besides its image (in store_).
   struct Kept {
-    cv::Mat gray;
     int64_t t_ns = 0;
     double travelled_m = 0.0;
     std::optional<core::OdometryPose> odom;
@@ -138,6 +190,7 @@ class CeilingTeacher {
   CeilingTeachOptions options_;
   std::unique_ptr<core::ceiling::CanonicalView> view_;
   core::ceiling::MosaicBuilder builder_;
+  std::unique_ptr<TeachFrameStore> store_;  // a pointer: the teacher stays movable
   std::vector<Kept> frames_;
   int64_t unlocalised_ = 0;
 };
