@@ -22,7 +22,7 @@
 #                 '^gen_' for the generated worlds only)
 #   --list        print the configuration names and exit
 #   --set K=V     passed to every `pepper_app evaluate` (repeatable): an ablation runs the matrix
-#                 with one navigator rule off, e.g. --set navigator.arrival_fade_ratio=0
+#                 with one navigator rule off, e.g. --set navigator.switching.min_next_scale_ratio=0
 # Example (two sessions, each half of the matrix, then one table):
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 1/2
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 2/2

@@ -74,12 +74,6 @@ std::vector<std::string> SwitcherOptions::validate() const {
     errors.push_back("localization.switching.min_next_scale_ratio = " +
                      std::to_string(min_next_scale_ratio) + " must be in [0, 2)");
   }
-  if (!(passed_next_scale_ratio == 0.0 ||
-        (passed_next_scale_ratio > min_next_scale_ratio && passed_next_scale_ratio < 4.0))) {
-    errors.push_back("localization.switching.passed_next_scale_ratio = " +
-                     std::to_string(passed_next_scale_ratio) +
-                     " must be 0 (off) or in (min_next_scale_ratio, 4)");
-  }
   return errors;
 }
 
@@ -125,9 +119,6 @@ bool scale_guard_blocks(const SwitchCounts& c, const SwitcherOptions& o) {
   return std::isnan(c.next_scale_ratio) ? !c.blind_switch_allowed
                                         : !(c.next_scale_ratio >= o.min_next_scale_ratio);
 }
-bool passed_next(const SwitchCounts& c, const SwitcherOptions& o) {
-  return o.passed_next_scale_ratio > 0.0 && c.next_scale_ratio >= o.passed_next_scale_ratio;
-}
 bool passed_by_distance(const SwitchCounts& c, const SwitcherOptions&) {
   return c.passed_by_distance;
 }
@@ -136,7 +127,7 @@ bool passed_by_odometry(const SwitchCounts& c, const SwitcherOptions&) {
 }
 
 // clang-format off
-const std::array<SwitchRule, 6> kSwitchRules{{
+const std::array<SwitchRule, 5> kSwitchRules{{
   {"three views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kThreeView),
    three_view_rule, "nL + nP (Ia, IN, INN) > nL + nP (IP, Ia, IN) (METHOD.md)"},
   {"two views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kTwoView), two_view_rule,
@@ -146,10 +137,6 @@ const std::array<SwitchRule, 6> kSwitchRules{{
    kCriterionGuardBlocked, scale_guard_blocks,
    "the paper's rules fire too early on short segments: wait until IN's points appear at "
    "nearly their taught size (unknown size: until the commands drove part of the segment)"},
-  {"passed IN", Kind::kAddition, "navigator.switching.passed_next_scale_ratio",
-   kCriterionPassedNext, passed_next,
-   "IN's points appear larger than taught: the robot is past IN (with near-identical IN and "
-   "INN the paper's rules can stall)"},
   {"passed IN by travel (odometry)", Kind::kAddition,
    "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
    kCriterionPassedByOdometry, passed_by_odometry,

@@ -45,8 +45,7 @@ const std::array<Transition, 13> kTable{{
    "still lost: stay still, try again on the next frame"},
   // After the key-image switcher (its rules: localization::switch_rules()).
   {Phase::kSegment, kNavigatingOrHolding, "final image reached",
-   "navigator.arrival_scale_ratio, navigator.arrival_fade_ratio, "
-   "navigator.switching.consecutive_frames", final_reached,
+   "navigator.arrival_scale_ratio, navigator.switching.consecutive_frames", final_reached,
    Action::kStopTourComplete, S::kTourComplete, false,
    "arrival at the final key image on consecutive frames: stop for good"},
   {Phase::kSegment, kNavigatingOrHolding, "switched", "navigator.switching.*", switched,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include <yaml-cpp/yaml.h>
 
@@ -18,6 +19,23 @@ using nlohmann::json;
   throw ConfigError((origin.empty() ? std::string() : origin + ": ") + key + ": " + what);
 }
 
+/// Keys that were options and are gone, with why: an old configuration file names what to do
+/// instead of only "unknown key" (docs/method/navigator.md, "ablations").
+const char* removed_key(const std::string& key) {
+  static const std::pair<const char*, const char*> kRemoved[] = {
+      {"navigator.switching.passed_next_scale_ratio",
+       "removed: the \"passed IN\" switch by IN's scale changed no run of the evaluation "
+       "matrix when it was off; \"passed IN by travel\" covers it (delete the key)"},
+      {"navigator.arrival_fade_ratio",
+       "removed: arrival when the final image fades is now fixed (0.95) and acts only without "
+       "odometry, where nothing else stops the robot at the end (delete the key)"},
+  };
+  for (const auto& [k, why] : kRemoved) {
+    if (key == k) return why;
+  }
+  return nullptr;
+}
+
 /// Reads one mapping of the tree at dotted path `path` ("" = the top) through the table.
 void apply_node(const json& node, const std::string& path, AppConfig& config,
                 const std::string& origin) {
@@ -30,6 +48,8 @@ void apply_node(const json& node, const std::string& path, AppConfig& config,
       }
     } else if (is_section(key)) {
       apply_node(*it, key, config, origin);
+    } else if (const char* why = removed_key(key)) {
+      fail(origin, key, why);
     } else {
       fail(origin, key, "unknown key (did you mean " + closest_key(key) + "?)");
     }

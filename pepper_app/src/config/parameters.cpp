@@ -493,9 +493,6 @@ std::vector<Parameter> build_table() {
     row("navigator.arrival_min_scale_points",
         navigator, &Navigator::arrival_min_scale_points, "", "[3, inf)",
         "points the scale ratio needs on the final segment"),
-    row("navigator.arrival_fade_ratio",
-        navigator, &Navigator::arrival_fade_ratio, "", "0 (off) or (0, 2)",
-        "once the final image's ratio read this, frames where it is unmeasurable count as arrival"),
     row("navigator.blind_switch_min_driven_fraction",
         navigator, &Navigator::blind_switch_min_driven_fraction, "", "0 (off) or (0, 1]",
         "scale ratio unknown: a switch waits until v covered this x the taught IP->IN length"),
@@ -665,9 +662,6 @@ std::vector<Parameter> build_table() {
     row("navigator.switching.min_next_scale_ratio",
         switching, &Switching::min_next_scale_ratio, "", "[0, 2)",
         "a switch is wanted only once IN's scale ratio reached this (0: the paper's rule)"),
-    row("navigator.switching.passed_next_scale_ratio",
-        switching, &Switching::passed_next_scale_ratio, "", "0 (off) or (min_next_scale_ratio, 4)",
-        "\"passed IN\": a switch is also wanted once IN's scale ratio reached this"),
 
     // robot: RobotConfig
     row("robot.camera_width_px",

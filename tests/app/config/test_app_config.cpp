@@ -73,6 +73,15 @@ TEST(AppConfig, UnknownKeysWrongTypesAndBadValuesNameTheKey) {
   expect_config_error(tmp.path() / "missing.yaml", {}, "missing.yaml: cannot open");
 }
 
+// An option that was removed says so, and what to do, in a file and on --set.
+TEST(AppConfig, ARemovedOptionSaysItWasRemoved) {
+  test::TempDir tmp;
+  const auto file = tmp.path() / "old.yaml";
+  std::ofstream(file) << "navigator:\n  switching:\n    passed_next_scale_ratio: 1.05\n";
+  expect_config_error(file, {}, "old.yaml: navigator.switching.passed_next_scale_ratio: removed");
+  expect_config_error({}, {"navigator.switching.passed_next_scale_ratio=0"}, "delete the key");
+}
+
 TEST(AppConfig, SharedFeatureOptionsReachTeachAndReplay) {
   const AppConfig c = load_app_config({}, {"features.extractor.max_lines=80",
                                            "features.klt.window_px=15"});

@@ -77,7 +77,6 @@ TEST(SwitchCriterion, ThreeAndTwoViewRules) {
 SwitcherOptions paper_rule() {
   SwitcherOptions o;
   o.min_next_scale_ratio = 0.0;
-  o.passed_next_scale_ratio = 0.0;
   return o;
 }
 
@@ -139,7 +138,7 @@ TEST(KeyImageSwitcher, ConfigurableStreakAndValidation) {
   EXPECT_THROW(segment_ending_at(0, 3), std::invalid_argument);
 }
 
-TEST(KeyImageSwitcher, ScaleGuardAndPassedNext) {
+TEST(KeyImageSwitcher, ScaleGuardAndAnUnknownRatio) {
   KeyImageSwitcher s(segment_ending_at(1, 6), 6);  // defaults: guard 0.9, passed 1.05
   SwitchCounts c = three_view(50, 20);             // three-view rule holds...
   c.next_scale_ratio = 0.8;                        // ...but IN still looks small: far from it
@@ -173,15 +172,16 @@ TEST(KeyImageSwitcher, ScaleGuardAndPassedNext) {
   early.next_scale_ratio = 0.95;  // a measured ratio is judged on its own
   EXPECT_EQ(s.update(early, false).streak, 1);
   s.update(none, false);  // reset the streak
-  // No paper rule, but IN clearly passed (scale > 1.05): switch after two frames as well.
+  // No paper rule and IN's points larger than taught: the scale alone wants no switch (the
+  // "passed IN" addition by scale is gone; the caller's travel verdicts cover a passed IN).
   SwitchCounts passed = three_view(10, 20);
-  passed.next_scale_ratio = 1.1;
+  passed.next_scale_ratio = 1.5;
   u = s.update(passed, false);
-  EXPECT_EQ(u.criteria_bits, kCriterionPassedNext);
-  EXPECT_EQ(s.update(passed, false).event, SwitchEvent::kSwitched);
-  EXPECT_EQ(s.segment().next, 4);
+  EXPECT_EQ(u.criteria_bits, 0);
+  EXPECT_EQ(s.update(passed, false).event, SwitchEvent::kNone);
+  EXPECT_EQ(s.segment().next, 3);
   SwitcherOptions bad;
-  bad.passed_next_scale_ratio = 0.5;  // below the guard
+  bad.min_next_scale_ratio = 2.5;
   EXPECT_EQ(bad.validate().size(), 1u);
 }
 

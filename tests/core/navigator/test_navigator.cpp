@@ -227,33 +227,49 @@ TEST(Navigator, StopsForGoodWhenASegmentIsOverdue) {
 
 // The final image fades: the taught frames up to the end (the ratio with the final image
 // reaches about 1), but arrival_scale_ratio is set out of reach, then blank frames (nothing
-// matches any more, as in a close-up of the furniture that ends a tour). With
-// arrival_fade_ratio the navigator counts those frames as arrival and stops with kTourComplete;
-// with it off it holds, then stops as lost (the previous behaviour).
-TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
-  auto run = [](double fade_ratio) {
+// matches any more, as in a close-up of the furniture that ends a tour). Without odometry (map
+// and frames) the navigator counts those frames as arrival (kArrivalFadeRatio) and stops with
+// kTourComplete; with odometry the fade is not arrival, the odometry is: while it reads the
+// robot 10 frames short of the end, the navigator drives the rest on odometry (dead reckoning)
+// instead of stopping (at the end it is arrival on odometry).
+TEST(Navigator, ArrivalWhenTheFinalImageFadesWithoutOdometry) {
+  auto run = [](bool odometry) {
     NavigatorOptions o;
     o.controller = ControllerKind::kIbvs;  // the hold's timing below is the IBVS law's
-    o.arrival_scale_ratio = 1.9;  // never reached: only the fade rule can complete the tour
-    o.arrival_fade_ratio = fade_ratio;
+    o.arrival_scale_ratio = 1.9;  // never reached: only the fade can complete the tour
     o.hold_s = 0.6;
-    Navigator nav(tour().map, o);
+    memory::VisualMemory map = tour().map;
+    if (odometry) {
+      for (memory::KeyImage& k : map.key_images) {
+        const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
+        k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+      }
+    }
+    Navigator nav(map, o);
     std::vector<StepResult> out;
-    for (const Frame& f : tour().frames) out.push_back(nav.step(f));
+    for (const Frame& taught : tour().frames) {
+      Frame f = taught;
+      const sim::Pose2D& p = tour().path.at(static_cast<size_t>(taught.index));
+      if (odometry) f.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+      out.push_back(nav.step(f));
+    }
     const int final_in = static_cast<int>(tour().map.key_images.size()) - 1;
     EXPECT_EQ(out.back().telemetry.in, final_in);
     EXPECT_FALSE(out.back().command.stop);
     const cv::Mat blank(camera().height_px, camera().width_px, CV_8UC1, cv::Scalar(128));
+    const Frame& short_of_end = tour().frames.at(tour().frames.size() - 11);
+    const sim::Pose2D& there = tour().path.at(static_cast<size_t>(short_of_end.index));
     for (int i = 1; i <= 6; ++i) {
       Frame f;
       f.gray = blank;
       f.t_ns = tour().frames.back().t_ns + i * 200'000'000LL;
       f.index = 10'000 + i;
+      if (odometry) f.odom = OdometryPose{there.x_m, there.y_m, there.yaw_rad};
       out.push_back(nav.step(f));
     }
     return std::vector<StepResult>(out.end() - 6, out.end());
   };
-  const auto faded = run(0.95);
+  const auto faded = run(false);
   // The consecutive-frame rule (switching.consecutive_frames) applies as for a measured ratio;
   // the first blank frame may still keep stale KLT tracks from the previous frame (measured:
   // 12 points), so the stop comes after n or n + 1 blank frames, and stays.
@@ -263,18 +279,16 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesAfterItWasNearlyReached) {
     EXPECT_TRUE(faded[i].command.stop) << i;
     EXPECT_EQ(faded[i].command.reason, StopReason::kTourComplete) << i;
   }
-  const auto off = run(0.0);
-  for (const StepResult& r : off) EXPECT_NE(r.command.reason, StopReason::kTourComplete);
-  EXPECT_EQ(off.back().command.reason, StopReason::kFeaturesLost);
+  const auto with_odometry = run(true);
+  for (const StepResult& r : with_odometry) {
+    EXPECT_NE(r.command.reason, StopReason::kTourComplete) << r.telemetry.frame_index;
+  }
+  // Vision sees nothing: the odometry drives the taught path's last 10 frames (dead
+  // reckoning), and arrival will be the odometry's past the final pose.
+  EXPECT_FALSE(with_odometry.back().command.stop);
+  EXPECT_EQ(with_odometry.back().telemetry.state, NavState::kDeadReckoning);
 }
 
-// Blind switches wait until the commands have driven part of the segment: the taught frames
-// replayed 2x faster than taught, with the scale ratio never measurable (min_scale_points out of
-// reach, no line ratio). With blind_switch_min_driven_fraction = 0.6 every switch after the
-// first comes once the commanded v, integrated over the frame stamps, covers 0.6 x the taught
-// IP -> IN length (taught time x vnhv.teach_speed_m_s); without the rule some come sooner (so
-// the check bites). teach_speed_m_s = 0.1: at 0.15 m/s and 2x the frame rate the guard opens
-// on a straight when the frames are 0.8 of the way to IN (0.6 x 0.1 = 0.8 x 0.5 x 0.15).
 TEST(Navigator, BlindSwitchesWaitUntilTheCommandsDroveTheSegment) {
   auto switch_gaps = [](double fraction) {
     NavigatorOptions o;
@@ -327,12 +341,11 @@ TEST(Navigator, PassedByTravelUsesTheCommandsOnlyWithoutOdometry) {
 
 // "Passed IN by travel (odometry)" while the scale ratio is known: the estimate must be past IN
 // by 2 sigmas along the robot. Here vision cannot switch (the guard wants IN's points at 1.9x
-// their taught size, "passed IN" by scale is off), so every switch is the odometry's; before
+// their taught size), so every switch is the odometry's; before
 // this rule took known ratios the replay stalled at the first IN.
 TEST(Navigator, PassedByOdometryWithAKnownScaleNeedsTwoSigmasPastIn) {
   NavigatorOptions o;
   o.switching.min_next_scale_ratio = 1.9;
-  o.switching.passed_next_scale_ratio = 0.0;
   memory::VisualMemory map = tour().map;
   for (memory::KeyImage& k : map.key_images) {
     const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));

@@ -129,11 +129,14 @@ TEST(NavigatorTransitions, SwitchRulesDecideTheSwitcher) {
   paper.next_scale_ratio = 0.95;  // near IN: the guard lets it through
   u = a.update(paper, false);
   EXPECT_EQ(u.event, localization::SwitchEvent::kSwitched);
-  SwitchCounts passed;  // no paper rule, but IN's points appear larger than taught
+  SwitchCounts passed;  // no paper rule, IN's points larger than taught: no rule by scale alone
   passed.next_scale_ratio = 1.2;
   u = a.update(passed, false);
-  EXPECT_EQ(u.event, localization::SwitchEvent::kSwitched);
-  EXPECT_EQ(u.criteria_bits, localization::kCriterionPassedNext);
+  EXPECT_EQ(u.event, localization::SwitchEvent::kNone);
+  EXPECT_EQ(u.criteria_bits, 0);
+  passed.passed_by_odometry = true;  // the odometry past IN: wanted, on two frames
+  EXPECT_EQ(a.update(passed, false).criteria_bits, localization::kCriterionPassedByOdometry);
+  EXPECT_EQ(a.update(passed, false).event, localization::SwitchEvent::kSwitched);
 }
 
 }  // namespace

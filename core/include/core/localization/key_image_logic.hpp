@@ -73,7 +73,7 @@ struct SwitchCounts {
   bool blind_switch_allowed = true;
   /// The caller's verdict, where it has no odometry, that the commands drove well past IN while
   /// the scale ratio is unknown (the navigator: twice the segment's taught length): a switch is
-  /// wanted, as for "passed IN" (criterion bit 16).
+  /// wanted (criterion bit 16).
   bool passed_by_distance = false;
   /// The caller's verdict that the robot's odometry, carried along the taught path, is past IN
   /// (the navigator: navigator/path_tracker.hpp; at once while the scale ratio is unknown, by 2
@@ -81,10 +81,10 @@ struct SwitchCounts {
   bool passed_by_odometry = false;
 };
 
-/// Bit set of the criteria that held: 1 three-view rule, 2 two-view rule (paper), 4 "passed IN"
-/// (SwitcherOptions::passed_next_scale_ratio), 8 blocked by the guard (min_next_scale_ratio).
+/// Bit set of the criteria that held: 1 three-view rule, 2 two-view rule (paper), 8 blocked by
+/// the guard (min_next_scale_ratio), 16 and 32 passed IN by travel (commands, odometry). Bit 4
+/// was "passed IN" by scale, removed in session 29 (docs/method/navigator.md, ablations).
 enum class SwitchCriterion : uint8_t { kNone = 0, kThreeView = 1, kTwoView = 2, kBoth = 3 };
-inline constexpr int kCriterionPassedNext = 4;
 inline constexpr int kCriterionPassedByDistance = 16;
 inline constexpr int kCriterionPassedByOdometry = 32;
 inline constexpr int kCriterionGuardBlocked = 8;
@@ -94,19 +94,15 @@ SwitchCriterion switch_criterion(const SwitchCounts& counts);
 
 struct SwitcherOptions {
   int consecutive_frames = 2;  ///< frames in a row a switch (or arrival) must be seen; paper: 2
-  /// Additions to the paper's rule (docs/method/localization.md), both from the apparent scale
-  /// of IN's points in the current image (SwitchCounts::next_scale_ratio, median_scale_ratio;
-  /// ~ depth from IN / depth from Ia: < 1 before IN, 1 at IN, > 1 past it):
-  /// - guard: a switch is wanted only when next_scale_ratio >= min_next_scale_ratio. Without
+  /// The guard added to the paper's rule (docs/method/localization.md), from the apparent
+  /// scale of IN's points in the current image (SwitchCounts::next_scale_ratio,
+  /// median_scale_ratio; ~ depth from IN / depth from Ia: < 1 before IN, 1 at IN, > 1 past it):
+  /// a switch is wanted only when next_scale_ratio >= min_next_scale_ratio. Without
   ///   it, a short next segment (dense key images in a turn) makes the three-view rule fire as
   ///   soon as the robot leaves IP, and the robot turns early. 0 disables (paper's rule).
   ///   An unknown ratio (NaN: too few points) blocks only when the caller says so
   ///   (SwitchCounts::blind_switch_allowed); otherwise the paper's rules decide.
   double min_next_scale_ratio = 0.9;
-  /// - "passed IN": a switch is also wanted when next_scale_ratio >= passed_next_scale_ratio,
-  ///   even if neither paper rule holds (with near-identical IN and INN the rules can stall).
-  ///   0 disables.
-  double passed_next_scale_ratio = 1.05;
   std::vector<std::string> validate() const;
 };
 

@@ -127,15 +127,6 @@ struct NavigatorOptions {
   /// Measured: white_corridor at VGA kept 12-13 points and 4-9 lines with the final image and
   /// drove 1 m past it with 20 (docs/method/localization.md). >= 3.
   int arrival_min_scale_points = 10;
-  /// Arrival when the final image fades: on the final segment, once the scale ratio with the
-  /// final image has read at least this, frames where it cannot be measured any more (too few
-  /// matches, typically a close-up of the furniture that ends the tour) also count as arrival
-  /// (same consecutive-frame rule). Why: driving on without seeing the final image is what
-  /// ends a tour in that furniture; stopping a few centimetres short is the safe side.
-  /// Measured (room_corridor_room, VGA, seed 1, runs 5 and 8 of 10): the ratio read 0.968-0.978
-  /// 2-3 cm before the final image, then 0-8 points and <= 6 lines; the robot drove 0.35 m on
-  /// into the lab shelf. 0: off, else in (0, 2).
-  double arrival_fade_ratio = 0.95;
   /// Overdue segment: stop for good when no switch happened for longer than
   /// max(segment_overdue_min_s, segment_overdue_factor * (t_ns of IN - t_ns of IP in the map)),
   /// frame time. Why: with too few features to switch or to see arrival (measured: the end of
@@ -328,7 +319,7 @@ class Navigator {
   /// Yaw commanded since the current segment began (command omega x frame interval), rad.
   double segment_turned_rad_ = 0.0;
   std::optional<int64_t> last_t_ns_;
-  // Highest scale ratio with the final image seen on the final segment (arrival_fade_ratio);
+  // Highest scale ratio with the final image seen on the final segment (kArrivalFadeRatio);
   // NaN until measured, reset whenever IN changes (final_ratio_in_: the IN it belongs to).
   double final_best_ratio_ = std::numeric_limits<double>::quiet_NaN();
   int final_ratio_in_ = -1;
