@@ -20,11 +20,11 @@ chmod +x "$TMP/app"
 run() { "$SRC/bench/closed_loop/matrix.sh" --out "$TMP/out" --app "$TMP/app" --gen-seeds 0 "$@"; }
 
 run --only '^robotics_room_light0.6$' --set navigator.switching.min_next_scale_ratio=0 \
-    --set navigator.turn_feedforward=0 > "$TMP/log"
+    --set navigator.hold_s=0.5 > "$TMP/log"
 [[ $(wc -l < "$TMP/calls") -eq 1 ]] || fail "one evaluate call expected: $(cat "$TMP/calls")"
 call=$(cat "$TMP/calls")
 for want in "evaluate" "--world worlds/robotics_room.yaml" "--light-factor 0.6" \
-            "--set navigator.switching.min_next_scale_ratio=0 --set navigator.turn_feedforward=0" \
+            "--set navigator.switching.min_next_scale_ratio=0 --set navigator.hold_s=0.5" \
             "--size 640x480" "--starts 10"; do
   [[ $call == *"$want"* ]] || fail "'$want' not in: $call"
 done

@@ -110,10 +110,6 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(blind_switch_min_driven_fraction >= 0.0 && blind_switch_min_driven_fraction <= 1.0,
         "blind_switch_min_driven_fraction", blind_switch_min_driven_fraction,
         "0 (off) or in (0, 1]");
-  check(turn_feedforward >= 0.0 && turn_feedforward <= 2.0, "turn_feedforward", turn_feedforward,
-        "in [0, 2]");
-  check(turn_feedforward_max_lead_rad >= 0.0, "turn_feedforward_max_lead_rad",
-        turn_feedforward_max_lead_rad, ">= 0");
   check(segment_overdue_factor >= 0.0, "segment_overdue_factor", segment_overdue_factor, ">= 0");
   check(segment_overdue_min_s >= 0, "segment_overdue_min_s", segment_overdue_min_s, ">= 0");
   check(scale_quantile > 0.0 && scale_quantile < 1.0, "scale_quantile", scale_quantile,
@@ -359,7 +355,6 @@ void Navigator::reset() {
   segment_start_t_ns_.reset();
   segment_from_switch_ = false;
   segment_driven_m_ = 0.0;
-  segment_turned_rad_ = 0.0;
   final_ratio_in_ = -1;
   klt_priors_.clear();
   tracker_.reset();
@@ -423,7 +418,6 @@ void Navigator::begin_segment(int64_t t_ns, bool from_switch) {
   segment_start_t_ns_ = t_ns;
   segment_from_switch_ = from_switch;
   segment_driven_m_ = 0.0;
-  segment_turned_rad_ = 0.0;
 }
 
 double Navigator::segment_taught_m() const {
@@ -562,69 +556,6 @@ bool Navigator::vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev,
       .has_value();
 }
 
-double Navigator::taught_turn_curvature_1_m(
-    const features::TwoViewMatches* next_prev,
-    std::optional<std::optional<control::PlanarPose>>* arc_fit) {
-  const localization::Segment& seg = switcher_->segment();
-  const int64_t key_pair =
-      static_cast<int64_t>(seg.prev) * static_cast<int64_t>(map_.key_images.size()) + seg.next;
-  if (const auto it = taught_curvature_by_segment_.find(key_pair);
-      it != taught_curvature_by_segment_.end()) {
-    return it->second;
-  }
-  double curvature_1_m = 0.0;
-  const double taught_m = segment_taught_m();
-  if (taught_m > 0.0) {
-    // IN's corners tracked into IP (a = IN, b = IP), as for the VNHV model, but without its
-    // planar-motion test: a turn on the spot has no parallax, and its yaw is what is wanted.
-    std::optional<features::TwoViewMatches> matched;
-    if (!next_prev) {
-      matched = features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
-      next_prev = &*matched;
-      arc_fit = nullptr;  // a fit to other matches than the caller's
-    }
-    std::optional<std::optional<control::PlanarPose>> own_fit;
-    if (arc_fit == nullptr) arc_fit = &own_fit;
-    if (!arc_fit->has_value()) {
-      arc_fit->emplace(control::fit_arc_segment(corner_observations(*next_prev), map_.camera.fx_px,
-                                                options_.vnhv.pose));
-    }
-    const std::optional<control::PlanarPose>& prev = **arc_fit;
-    // IP's yaw in IN's frame is minus the turn from IP to IN.
-    if (prev && std::abs(prev->yaw_rad) > options_.vnhv.max_segment_turn_rad) {
-      curvature_1_m = -prev->yaw_rad / taught_m;
-    }
-  }
-  taught_curvature_by_segment_.emplace(key_pair, curvature_1_m);
-  return curvature_1_m;
-}
-
-double Navigator::apply_taught_turn(double omega_rad_s, Telemetry& tel) {
-  const double kappa_1_m = taught_turn_curvature_1_m();
-  const double v_m_s = has_command_ ? last_command_.v_m_s : options_.schedule.v_turn_m_s;
-  const double ff = options_.turn_feedforward * kappa_1_m * v_m_s;
-  if (ff == 0.0 || std::signbit(omega_rad_s) != std::signbit(ff)) return omega_rad_s;
-  // The taught turn for the distance commanded on this segment so far.
-  const double taught_turn_rad = kappa_1_m * std::min(segment_driven_m_, segment_taught_m());
-  const double lead_rad = options_.turn_feedforward_max_lead_rad;
-  // Floor: IBVS turns the same way but slower while the commanded turn lags the taught one (it
-  // never adds a turn IBVS already made). A demand the other way (the robot turned past IN's
-  // view) is kept.
-  const bool lagging = kappa_1_m > 0.0 ? segment_turned_rad_ < taught_turn_rad
-                                       : segment_turned_rad_ > taught_turn_rad;
-  // Ceiling: IBVS turns the same way but faster while the commanded turn leads by > lead_rad.
-  const bool leading =
-      lead_rad > 0.0 && (kappa_1_m > 0.0 ? segment_turned_rad_ > taught_turn_rad + lead_rad
-                                         : segment_turned_rad_ < taught_turn_rad - lead_rad);
-  const bool slower = std::abs(omega_rad_s) < std::abs(ff);
-  const bool faster = std::abs(omega_rad_s) > std::abs(ff);
-  if ((lagging && slower) || (leading && faster)) {
-    tel.omega_feedforward_rad_s = ff - omega_rad_s;
-    return ff;
-  }
-  return omega_rad_s;
-}
-
 std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetry& tel) {
   const localization::Segment& seg = switcher_->segment();
   const control::VnhvOptions& o = options_.vnhv;
@@ -639,14 +570,10 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
     const double taught_m = segment_taught_m();
     const features::TwoViewMatches next_prev =
         features::match_two_view(key(seg.next), key(seg.prev), options_.matcher);
-    // The turn feed-forward fits its taught turn to the same matches (once per segment), and
-    // the model below takes the same fit (focal_px is map_.camera.fx_px there too).
-    std::optional<std::optional<control::PlanarPose>> arc_fit;
-    if (options_.turn_feedforward > 0.0) taught_turn_curvature_1_m(&next_prev, &arc_fit);
     if (vnhv_planar_motion_ok(next_prev, focal_px)) {
       const std::vector<control::CornerObservation> obs = corner_observations(next_prev);
-      if (!arc_fit) arc_fit.emplace(control::fit_arc_segment(obs, focal_px, o.pose));
-      const std::optional<control::PlanarPose>& prev = *arc_fit;
+      const std::optional<control::PlanarPose> prev =
+          control::fit_arc_segment(obs, focal_px, o.pose);
       const double turn_rad = prev ? std::abs(prev->yaw_rad) : 0.0;
       if (prev && turn_rad <= o.max_segment_turn_rad && taught_m >= o.straight_min_length_m) {
         // A long straight segment: distant points count too.
@@ -676,7 +603,6 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
                          vnhv_curvature_1_m_);
   }
   tel.vnhv_model_points = vnhv_model_ ? static_cast<int>(vnhv_model_->point_by_corner.size()) : 0;
-  vnhv_unlocated_ = true;
   if (!vnhv_model_) return std::nullopt;
   const features::TwoViewMatches& tv_n = fm.two_view(seg.next, key(seg.next));
   bool past_next = false;
@@ -777,7 +703,6 @@ std::optional<double> Navigator::vnhv_omega(features::FrameMatcher& fm, Telemetr
   }
   const auto est = vnhv_filter_.estimate(tel.t_ns);
   if (!est) return std::nullopt;
-  vnhv_unlocated_ = false;
   tel.vnhv_lateral_m = est->lateral_m;
   tel.vnhv_heading_rad = est->heading_rad;
   // Past IN (the switch to the next segment comes later) the line IP -> IN leads straight on
@@ -809,11 +734,9 @@ void Navigator::check_frame(const Frame& frame) const {
 
 void Navigator::account_commanded_motion(int64_t t_ns) {
   if (last_t_ns_ && has_command_ && !last_command_.stop) {
-    // The command sent after the previous frame drove the robot until now (blind switches,
-    // turn feed-forward).
+    // The command sent after the previous frame drove the robot until now (blind switches).
     const double dt_s = static_cast<double>(t_ns - *last_t_ns_) * 1e-9;
     segment_driven_m_ += last_command_.v_m_s * dt_s;
-    segment_turned_rad_ += last_command_.omega_rad_s * dt_s;
   }
   last_t_ns_ = t_ns;
 }
@@ -979,11 +902,6 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
   }
   if (!omega) {
     omega = ibvs_omega(fm, tel);  // VNHV falls back to IBVS without two-view geometry
-    // Turn feed-forward where VNHV has no estimate on the segment (no model, or a model that has
-    // not located the current image; not past IN of a located one), on a segment entered by a
-    // switch (after a (re)localisation the robot may be anywhere on it, so the turn still to do
-    // is unknown).
-    const bool unlocated = options_.controller == ControllerKind::kVnhv && vnhv_unlocated_;
     if (omega && options_.controller == ControllerKind::kVnhv && odometry_steers()) {
       // VNHV has no estimate on this segment but the image still has features (IBVS has a
       // demand), and a vision fix is at most odometry_steer_max_m of odometry behind: the same
@@ -992,8 +910,6 @@ std::optional<double> Navigator::control(features::FrameMatcher& fm, Telemetry& 
       bool on_the_spot = false;
       omega = odometry_demand(on_the_spot);
       tel.odometry_steered = true;
-    } else if (omega && options_.turn_feedforward > 0.0 && unlocated && segment_from_switch_) {
-      omega = apply_taught_turn(*omega, tel);
     }
   }
   if (omega && on_taught_spot_turn_ && !tel.odometry_steered) {

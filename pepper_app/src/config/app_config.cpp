@@ -29,6 +29,11 @@ const char* removed_key(const std::string& key) {
       {"navigator.arrival_fade_ratio",
        "removed: arrival when the final image fades is now fixed (0.95) and acts only without "
        "odometry, where nothing else stops the robot at the end (delete the key)"},
+      {"navigator.turn_feedforward",
+       "removed: the taught-turn feed-forward changed no run of the evaluation matrix when it "
+       "was off (odometry steers where VNHV has no estimate; delete the key)"},
+      {"navigator.turn_feedforward_max_lead_rad",
+       "removed with the taught-turn feed-forward it capped (delete the key)"},
   };
   for (const auto& [k, why] : kRemoved) {
     if (key == k) return why;

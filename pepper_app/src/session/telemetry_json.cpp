@@ -75,7 +75,6 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"odom_along_sigma_m", num(t.odom_along_sigma_m)},
       {"odom_heading_sigma_rad", num(t.odom_heading_sigma_rad)},
       {"omega_demand_rad_s", num(t.omega_demand_rad_s)},
-      {"omega_feedforward_rad_s", num(t.omega_feedforward_rad_s)},
       {"turning", t.turning},
       {"hold_elapsed_ns", t.hold_elapsed_ns},
       {"odom_progress", num(t.odom_progress)},

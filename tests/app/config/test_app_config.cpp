@@ -80,6 +80,7 @@ TEST(AppConfig, ARemovedOptionSaysItWasRemoved) {
   std::ofstream(file) << "navigator:\n  switching:\n    passed_next_scale_ratio: 1.05\n";
   expect_config_error(file, {}, "old.yaml: navigator.switching.passed_next_scale_ratio: removed");
   expect_config_error({}, {"navigator.switching.passed_next_scale_ratio=0"}, "delete the key");
+  expect_config_error({}, {"navigator.turn_feedforward=1"}, "navigator.turn_feedforward: removed");
 }
 
 TEST(AppConfig, SharedFeatureOptionsReachTeachAndReplay) {

@@ -149,30 +149,6 @@ struct NavigatorOptions {
   /// (teach drives run at 0.2-0.25 m/s) and after 0.1 in turns (0.08 m/s): replay speed
   /// decides, so the guard counts distance. 0: off, else in (0, 1].
   double blind_switch_min_driven_fraction = 0.6;
-  /// Turn feed-forward (VNHV controller): on a segment entered by a switch, on frames where VNHV
-  /// has no estimate (no model, or a model that has not located the image yet: IBVS drives) and
-  /// taught as a turn (IP's yaw w.r.t. IN, fitted once per segment from
-  /// IN's corners tracked into IP, control::fit_arc_segment, exceeds vnhv.max_segment_turn_rad),
-  /// the yaw-rate demand is raised to this gain x the taught curvature kappa (turn / taught
-  /// length, the length as in blind_switch_min_driven_fraction) x the last command's speed,
-  /// when IBVS turns the same way but slower and the yaw commanded since the segment began
-  /// (command omega over frame stamps) is short of kappa x the distance commanded (at most the
-  /// taught length). A demand the other way (the robot turned past IN's view) is kept. Why:
-  /// where a turn is cut into key images a few frames apart, IBVS's demand fades as each IN
-  /// comes into view and the heading fell behind the turn (room_corridor_room's lab doorway,
-  /// docs/method/control.md "Turns"); without the "short of" condition the floor also turned on
-  /// where IBVS had already turned sharply (first left turn: 21 cm inside). Not used by the IBVS
-  /// controller (its test tour's closed loop ended 0.49 m off laterally with it, 0.40 without).
-  /// 0: off. In [0, 2].
-  double turn_feedforward = 1.0;
-  /// The other side of turn_feedforward, on the same segments: when the yaw commanded since the
-  /// segment began leads the taught turn for the distance commanded by more than this, a demand
-  /// faster than the taught rate in the turn's direction is lowered to it. Why: at the turning
-  /// speed (0.08 m/s) IBVS turns to IN's view on the spot and cut room_corridor_room's first
-  /// left turn by up to 18 cm (docs/method/control.md "Turns"); there, in run 8, segments 14 ->
-  /// 16 had models that never located an image, and IBVS turned at up to 0.44 rad/s on them
-  /// (17.2 cm inside; 16.0 with these frames counted). 0: no cap. >= 0, rad.
-  double turn_feedforward_max_lead_rad = 0.1;
   double segment_overdue_factor = 6.0;
   double segment_overdue_min_s = 20.0;
   /// Dead reckoning (issue 29): how far the robot may drive on odometry alone, since vision was
@@ -261,16 +237,6 @@ class Navigator {
   std::optional<double> ibvs_omega(features::FrameMatcher& fm, Telemetry& tel);
   void ensure_pyramids(const localization::Segment& seg);
   std::optional<double> vnhv_omega(features::FrameMatcher& fm, Telemetry& tel);
-  /// turn_feedforward: the current segment's taught curvature (> 0 left), 1/m; 0 on a segment
-  /// taught straight or without a fit. Fitted once per segment (then cached), to next_prev (IN's
-  /// corners tracked into IP) when given, else to a match of its own. arc_fit (with next_prev):
-  /// control::fit_arc_segment of next_prev, used when it holds one and set when this computes
-  /// it, so that VNHV's segment model reuses the same fit (a grid of ~1900 angles).
-  double taught_turn_curvature_1_m(
-      const features::TwoViewMatches* next_prev = nullptr,
-      std::optional<std::optional<control::PlanarPose>>* arc_fit = nullptr);
-  /// turn_feedforward and turn_feedforward_max_lead_rad on IBVS's demand: the demand to use.
-  double apply_taught_turn(double omega_rad_s, Telemetry& tel);
   /// VNHV: whether IN's corners tracked into IP (a = IN, b = IP) show a reliable planar motion.
   bool vnhv_planar_motion_ok(const features::TwoViewMatches& next_prev, double focal_px) const;
   void remember_tracks(const features::FrameMatcher& fm);
@@ -316,8 +282,6 @@ class Navigator {
   bool segment_from_switch_ = false;  ///< the current segment began with a switch
   /// Forward distance commanded since the current segment began (command v x frame interval), m.
   double segment_driven_m_ = 0.0;
-  /// Yaw commanded since the current segment began (command omega x frame interval), rad.
-  double segment_turned_rad_ = 0.0;
   std::optional<int64_t> last_t_ns_;
   // Highest scale ratio with the final image seen on the final segment (kArrivalFadeRatio);
   // NaN until measured, reset whenever IN changes (final_ratio_in_: the IN it belongs to).
@@ -335,9 +299,6 @@ class Navigator {
   double vnhv_curvature_1_m_ = 0.0;  ///< the segment's taught arc; 0: the chord IP -> IN
   control::SegmentPoseOptions vnhv_pose_;  ///< the segment's reconstruction and resection settings
   control::DeviationFilter vnhv_filter_;
-  /// This frame, VNHV had no estimate of the robot on the segment: no model, or a model that
-  /// has not located the current image yet.
-  bool vnhv_unlocated_ = true;
   /// This frame, a VNHV fix corrected the odometry estimate.
   bool fixed_this_frame_ = false;
   /// The odometry estimate's sigmas (along and across the robot's heading, m; the heading, rad)
@@ -354,9 +315,6 @@ class Navigator {
   /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
   /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.
   bool on_taught_spot_turn_ = false;
-  // turn_feedforward: taught curvature per segment, key (IP, IN) -> 1/m. A function of the map
-  // only, so it is kept across segments and resets.
-  std::unordered_map<int64_t, double> taught_curvature_by_segment_;
   // Speed: the verified point matches of the previous frame per key image of the segment, the
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
   // segment is forgotten, so it depends on the frames only.

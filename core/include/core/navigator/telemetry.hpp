@@ -119,9 +119,6 @@ struct Telemetry {
   /// sigma along the robot; NaN without an odometry estimate.
   double odom_past_next_m = kNaN, odom_along_sigma_m = kNaN;
   double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
-  /// Part of omega_demand_rad_s fed forward from the segment's taught turn (turn_feedforward),
-  /// rad/s; NaN when none was added.
-  double omega_feedforward_rad_s = kNaN;
   bool turning = false;
   int64_t hold_elapsed_ns = 0;  ///< time since the last usable control, when holding
   // Odometry (navigator/path_tracker.hpp). NaN where unknown.
