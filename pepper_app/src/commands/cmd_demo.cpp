@@ -161,9 +161,11 @@ int run_demo(const DemoArgs& args) {
     core::memory::VisualMemory map = core::memory::load_map(map_dir);
     StepFunction step;  // ceiling mode: the ceiling navigator steps the same replay loop
     if (mode == core::NavMode::kCeiling) {
-      step = make_ceiling_replay(replay_robot.mock.get(), config.robot.ceiling_height_m, map_dir,
-                                 map, ro.head.head_pitch_rad, config.ceiling_navigator_options())
-                 .step;
+      CeilingReplay ceiling =
+          make_ceiling_replay(replay_robot.mock.get(), config.robot.ceiling_height_m, map_dir, map,
+                              ro.head.head_pitch_rad, config.ceiling_navigator_options());
+      step = std::move(ceiling.step);
+      ro.ceiling_telemetry = std::move(ceiling.telemetry_json);
     }
     const ReplayResult replayed =
         run_replay_session(replay_robot, std::move(map), ro, link, std::move(step));

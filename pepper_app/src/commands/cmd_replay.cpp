@@ -137,6 +137,7 @@ int run_replay(const ReplayArgs& a) {
                               o.head.head_pitch_rad, config.ceiling_navigator_options());
       for (const auto& w : ceiling.warnings) console.line("pepper_app replay: warning: " + w);
       step = std::move(ceiling.step);
+      o.ceiling_telemetry = std::move(ceiling.telemetry_json);
     }
     const ReplayResult r = run_replay_session(robot, std::move(map), o, link, step);
     if (!a.mock_command_log.empty() && robot.mock) {

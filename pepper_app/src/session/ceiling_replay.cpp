@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <stdexcept>
+#include <utility>
 
 #include "session/ceiling_map.hpp"
 #include "session/ceiling_teach.hpp"
@@ -51,8 +53,32 @@ CeilingReplay make_ceiling_replay(const sim::MockRobot* robot, double ceiling_he
   }
   r.navigator = std::make_shared<core::ceiling::CeilingNavigator>(
       std::move(parts.mosaic), std::move(parts.tour), setup.camera, setup.cam_in_base_m, options);
-  r.step = [nav = r.navigator](const core::Frame& frame) { return nav->step(frame).step; };
+  auto last = std::make_shared<core::ceiling::CeilingTelemetry>();
+  r.step = [nav = r.navigator, last](const core::Frame& frame) {
+    core::ceiling::CeilingStepResult result = nav->step(frame);
+    *last = result.ceiling;
+    return std::move(result.step);
+  };
+  r.telemetry_json = [last] { return ceiling_telemetry_to_json(*last); };
   return r;
+}
+
+nlohmann::json ceiling_telemetry_to_json(const core::ceiling::CeilingTelemetry& t) {
+  nlohmann::json pose = nullptr;
+  if (t.pose_known) {
+    pose = {{"x_m", t.T_mosaic_base.x_m},
+            {"y_m", t.T_mosaic_base.y_m},
+            {"theta_rad", t.T_mosaic_base.theta_rad}};
+  }
+  return {{"fix", t.fix},
+          {"prior_used", t.prior_used},
+          {"matches", t.matches},
+          {"inliers", t.inliers},
+          {"pose_known", t.pose_known},
+          {"T_mosaic_base", pose},
+          {"coasted_m", t.coasted_m},
+          {"perceive_ms", t.perceive_ms},
+          {"localise_ms", t.localise_ms}};
 }
 
 }  // namespace pepper::app

@@ -18,9 +18,12 @@
 // replay).
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "core/ceiling/ceiling_navigator.hpp"
 #include "core/memory/visual_memory.hpp"
@@ -38,12 +41,21 @@ namespace pepper::app {
 struct CeilingReplay {
   std::shared_ptr<core::ceiling::CeilingNavigator> navigator;
   StepFunction step;
+  /// The last step's ceiling telemetry (ceiling_telemetry_to_json) for the replay's JSON lines
+  /// (ReplaySessionOptions::ceiling_telemetry): the pose in the mosaic, the fix and its counts.
+  std::function<nlohmann::json()> telemetry_json;
   std::vector<std::string> warnings;  ///< for the operator (a tour that cannot be checked)
 };
 CeilingReplay make_ceiling_replay(const sim::MockRobot* robot, double ceiling_height_m,
                                   const std::filesystem::path& map_dir,
                                   const core::memory::VisualMemory& map, double head_pitch_rad,
                                   const core::ceiling::CeilingNavigatorOptions& options = {});
+
+/// One step's CeilingTelemetry: {"fix", "prior_used", "matches", "inliers", "pose_known",
+/// "T_mosaic_base": {"x_m", "y_m", "theta_rad"} (null when no pose is known: before the first
+/// fix, or coasting ended), "coasted_m", "perceive_ms", "localise_ms"}; frames and units as
+/// core/ceiling (mosaic frame = the base frame of the teach's first frame, metres, radians CCW).
+nlohmann::json ceiling_telemetry_to_json(const core::ceiling::CeilingTelemetry& t);
 
 /// Largest relative difference between the teach's and the replay's ceiling distance above the
 /// camera: the head pitches a replay may use move Pepper's camera by about 4 mm (0.3 % of a

@@ -410,6 +410,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                              {"command", command_to_json(c)},
                              {"telemetry", telemetry_to_json(t)}};
       if (!robot_view.telemetry.is_null()) line["robot"] = robot_view.telemetry;
+      if (options.ceiling_telemetry) line["ceiling"] = options.ceiling_telemetry();
       if (robot.mock) {
         const auto gt = robot.mock->ground_truth();
         s.has_pose = true;

@@ -70,6 +70,9 @@ struct ReplaySessionOptions {
   int frame_timeout_ms = 1000;       ///< no frame this long: stop and end ("frame_timeout")
   int64_t max_frames = 0;            ///< > 0: stop and end after this many frames
   std::filesystem::path telemetry_jsonl;  ///< non-empty: one JSON line per frame
+  /// Ceiling mode: the last step's ceiling telemetry (CeilingReplay::telemetry_json), added to
+  /// each telemetry_jsonl line as "ceiling"; empty in forward mode.
+  std::function<nlohmann::json()> ceiling_telemetry;
   std::filesystem::path record_dir;  ///< non-empty: record the frames here
   double pace_hz = 0.0;              ///< > 0: at most this many frames per second
   bool wait_for_start = false;       ///< wait for the UI's start_replay before moving

@@ -14,6 +14,8 @@
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "app/e2e/app_process.hpp"
 #include "core/ceiling/ceiling_tour.hpp"
 #include "core/ceiling/mosaic.hpp"
@@ -64,9 +66,11 @@ TEST(CeilingTeachE2E, TeachesTheHallSavesMosaicAndRelayImagesAndRefusesDamage) {
   // localised against the mosaic and driving (the frame limit ends it, exit 1).
   {
     const fs::path events = dir / "replay_events.jsonl";
+    const fs::path telemetry = dir / "replay_telemetry.jsonl";
     test::AppProcess replay({"replay", "--mode", "ceiling", "--robot", "mock:" + kHall, "--map",
                              map_dir.string(), "--mock-start", "0", "--seed", "1",
-                             "--max-frames", "60", "--events", events.string()},
+                             "--max-frames", "60", "--events", events.string(), "--json",
+                             telemetry.string()},
                             dir, "replay");
     EXPECT_EQ(replay.wait(), 1) << replay.both();
     EXPECT_TRUE(contains(replay.both(), "replay max_frames")) << replay.both();
@@ -74,6 +78,36 @@ TEST(CeilingTeachE2E, TeachesTheHallSavesMosaicAndRelayImagesAndRefusesDamage) {
     std::ifstream in(events);
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     EXPECT_TRUE(contains(text, "\"why\":\"navigator\"")) << "never drove";
+    // Each --json line carries the ceiling telemetry; where the localiser fixed the pose, the
+    // robot's pose in the mosaic moved as the simulated robot did (the mosaic's frame is the
+    // teach's first base frame, so compare displacements, not positions).
+    std::ifstream lines(telemetry);
+    std::string line;
+    int n = 0, fixes = 0;
+    std::optional<nlohmann::json> first, last;
+    while (std::getline(lines, line)) {
+      const nlohmann::json j = nlohmann::json::parse(line);
+      ++n;
+      ASSERT_TRUE(j.contains("ceiling")) << line;
+      const nlohmann::json& c = j.at("ceiling");
+      if (!c.at("fix").get<bool>()) continue;
+      ++fixes;
+      EXPECT_TRUE(c.at("pose_known").get<bool>());
+      EXPECT_GT(c.at("inliers").get<int>(), 0);
+      if (!first) first = j;
+      last = j;
+    }
+    EXPECT_EQ(n, 60);
+    ASSERT_GT(fixes, 30);
+    auto apart_m = [](const nlohmann::json& a, const nlohmann::json& b) {
+      return std::hypot(b.at("x_m").get<double>() - a.at("x_m").get<double>(),
+                        b.at("y_m").get<double>() - a.at("y_m").get<double>());
+    };
+    const double in_mosaic_m = apart_m(first->at("ceiling").at("T_mosaic_base"),
+                                       last->at("ceiling").at("T_mosaic_base"));
+    const double true_m = apart_m(first->at("ground_truth"), last->at("ground_truth"));
+    EXPECT_GT(true_m, 0.1) << "the robot hardly moved";
+    EXPECT_NEAR(in_mosaic_m, true_m, 0.03 + 0.05 * true_m);
   }
   // A forward replay of it is refused naming both modes.
   {
