@@ -39,22 +39,6 @@ bool finite(const PlanarPose& p) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad);
 }
 
-json height_check_json(const HeightCheck& h) {
-  return {{"status", to_string(h.status)},
-          {"configured_height_m", h.configured_height_m},
-          {"configured_above_camera_m", h.configured_above_camera_m},
-          {"windows", h.windows},
-          {"windows_rejected", h.windows_rejected},
-          {"windows_turning", h.windows_turning},
-          {"odometry_m", h.odometry_m},
-          {"scale_ratio", h.scale_ratio},
-          {"scale_ratio_spread", h.scale_ratio_spread},
-          {"scale_ratio_sigma", h.scale_ratio_sigma},
-          {"estimated_above_camera_m", h.estimated_above_camera_m},
-          {"estimated_height_m", h.estimated_height_m},
-          {"estimated_sigma_m", h.estimated_sigma_m},
-          {"disagrees", h.disagrees}};
-}
 
 HeightCheck height_check_from_json(const json& j) {
   HeightCheck h;  // an unknown status throws std::invalid_argument
@@ -76,6 +60,23 @@ HeightCheck height_check_from_json(const json& j) {
 }
 
 }  // namespace
+
+json height_check_to_json(const HeightCheck& h) {
+  return {{"status", to_string(h.status)},
+          {"configured_height_m", h.configured_height_m},
+          {"configured_above_camera_m", h.configured_above_camera_m},
+          {"windows", h.windows},
+          {"windows_rejected", h.windows_rejected},
+          {"windows_turning", h.windows_turning},
+          {"odometry_m", h.odometry_m},
+          {"scale_ratio", h.scale_ratio},
+          {"scale_ratio_spread", h.scale_ratio_spread},
+          {"scale_ratio_sigma", h.scale_ratio_sigma},
+          {"estimated_above_camera_m", h.estimated_above_camera_m},
+          {"estimated_height_m", h.estimated_height_m},
+          {"estimated_sigma_m", h.estimated_sigma_m},
+          {"disagrees", h.disagrees}};
+}
 
 CeilingTourError::CeilingTourError(fs::path path, const std::string& what)
     : std::runtime_error(path.string() + ": " + what), path_(std::move(path)) {}
@@ -137,7 +138,7 @@ void save_ceiling_tour(const CeilingTour& tour, const fs::path& file) {
             {"ceiling", tour.ceiling ? json{{"height_m", tour.ceiling->height_m},
                                             {"above_camera_m", tour.ceiling->above_camera_m}}
                                      : json(nullptr)},
-            {"height_check", tour.height_check ? height_check_json(*tour.height_check)
+            {"height_check", tour.height_check ? height_check_to_json(*tour.height_check)
                                                : json(nullptr)}};
   j["crc32"] = body_crc(j);
   const std::string text = j.dump(1) + "\n";

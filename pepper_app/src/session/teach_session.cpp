@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/ceiling/ceiling_tour.hpp"
 #include "core/mapping/drive_odometer.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "session/ceiling_map.hpp"
@@ -562,23 +563,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         // The configured ceiling height against the odometry (docs/method/ceiling.md "Checking
         // the ceiling height at teach"): reported, never changed.
         const core::ceiling::HeightCheck& h = *cm.tour.height_check;
-        nlohmann::json ev = {{"event", "ceiling_height_check"},
-                             {"status", core::ceiling::to_string(h.status)},
-                             {"configured_height_m", h.configured_height_m},
-                             {"configured_above_camera_m", h.configured_above_camera_m},
-                             {"windows", h.windows},
-                             {"windows_rejected", h.windows_rejected},
-                             {"windows_turning", h.windows_turning},
-                             {"odometry_m", h.odometry_m},
-                             {"disagrees", h.disagrees}};
-        if (h.estimated()) {
-          ev["scale_ratio"] = h.scale_ratio;
-          ev["scale_ratio_sigma"] = h.scale_ratio_sigma;
-          ev["scale_ratio_spread"] = h.scale_ratio_spread;
-          ev["estimated_height_m"] = h.estimated_height_m;
-          ev["estimated_above_camera_m"] = h.estimated_above_camera_m;
-          ev["estimated_sigma_m"] = h.estimated_sigma_m;
-        }
+        nlohmann::json ev = {{"event", "ceiling_height_check"}};
+        ev.update(core::ceiling::height_check_to_json(h));  // the tour file's object
         link.event(ev);
         if (const auto w = ceiling_height_warning(h)) result.warnings.push_back(*w);
       }

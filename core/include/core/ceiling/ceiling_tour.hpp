@@ -28,6 +28,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/ceiling/height_check.hpp"
 #include "core/ceiling/planar_rigid.hpp"
 
@@ -76,6 +78,10 @@ class CeilingTourError : public std::runtime_error {
  private:
   std::filesystem::path path_;
 };
+
+/// A height check as the file's "height_check" object (the fields above; NaN: null). The teach's
+/// `ceiling_height_check` event carries the same object.
+nlohmann::json height_check_to_json(const HeightCheck& h);
 
 /// Writes `tour` atomically to `file`. Throws CeilingTourError (an invalid tour is not written).
 void save_ceiling_tour(const CeilingTour& tour, const std::filesystem::path& file);
