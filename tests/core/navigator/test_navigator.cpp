@@ -43,18 +43,21 @@ struct SwitchRun {
   int by_distance = 0;  ///< frames with the "passed IN by travel (commands)" criterion bit
   int by_odometry = 0;  ///< frames with the "passed IN by travel (odometry)" criterion bit
 };
+// The test tour's map with each key image's taught pose as its odometry (exact odometry).
+memory::VisualMemory map_with_taught_odometry() {
+  memory::VisualMemory map = tour().map;
+  for (memory::KeyImage& k : map.key_images) {
+    const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
+    k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
+  }
+  return map;
+}
+
 // with_odometry: the map keeps each key image's taught pose as its odometry and every frame
 // carries the taught path's pose (exact odometry).
 SwitchRun replay_switch_gaps(const NavigatorOptions& o, int64_t time_divisor,
                              bool with_odometry = false) {
-  memory::VisualMemory map = tour().map;
-  if (with_odometry) {
-    for (memory::KeyImage& k : map.key_images) {
-      const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
-      k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
-    }
-  }
-  Navigator nav(map, o);
+  Navigator nav(with_odometry ? map_with_taught_odometry() : tour().map, o);
   const auto& keys = tour().map.key_images;
   const int64_t t0 = tour().frames.front().t_ns;
   SwitchRun out;
@@ -238,14 +241,7 @@ TEST(Navigator, ArrivalWhenTheFinalImageFadesWithoutOdometry) {
     o.controller = ControllerKind::kIbvs;  // the hold's timing below is the IBVS law's
     o.arrival_scale_ratio = 1.9;  // never reached: only the fade can complete the tour
     o.hold_s = 0.6;
-    memory::VisualMemory map = tour().map;
-    if (odometry) {
-      for (memory::KeyImage& k : map.key_images) {
-        const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
-        k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
-      }
-    }
-    Navigator nav(map, o);
+    Navigator nav(odometry ? map_with_taught_odometry() : tour().map, o);
     std::vector<StepResult> out;
     for (const Frame& taught : tour().frames) {
       Frame f = taught;
@@ -346,12 +342,7 @@ TEST(Navigator, PassedByTravelUsesTheCommandsOnlyWithoutOdometry) {
 TEST(Navigator, PassedByOdometryWithAKnownScaleNeedsTwoSigmasPastIn) {
   NavigatorOptions o;
   o.switching.min_next_scale_ratio = 1.9;
-  memory::VisualMemory map = tour().map;
-  for (memory::KeyImage& k : map.key_images) {
-    const sim::Pose2D& p = tour().path.at(static_cast<size_t>(k.source_frame_index));
-    k.odom = OdometryPose{p.x_m, p.y_m, p.yaw_rad};
-  }
-  Navigator nav(map, o);
+  Navigator nav(map_with_taught_odometry(), o);
   int switches = 0, known_ratio_frames = 0;
   for (const Frame& taught : tour().frames) {
     Frame f = taught;
