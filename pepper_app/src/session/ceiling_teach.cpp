@@ -5,10 +5,11 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <stdexcept>
 #include <system_error>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/ceiling/landmarks.hpp"
 #include "core/ceiling/observation.hpp"

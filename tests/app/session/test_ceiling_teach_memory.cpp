@@ -34,6 +34,7 @@
 #include "sim/mock_robot.hpp"
 #include "sim/teach_driver.hpp"
 #include "sim/world.hpp"
+#include "support/temp_dir.hpp"
 
 namespace pepper::app {
 namespace {
@@ -142,15 +143,6 @@ size_t files_in(const fs::path& dir) {
   size_t n = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++n;
   return n;
-}
-
-// A folder of this test's own under TMPDIR (tests/CMakeLists.txt points it into the build tree).
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("pepper_ceiling_memory_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
 }
 
 // The main promise: the same relay frames, key images (pixels and features) and mosaic as the
@@ -317,7 +309,8 @@ TEST(CeilingTeachMemory, FrameStoreFolderIsRemovedWithTheTeacher) {
 TEST(CeilingTeachMemory, DiskFailuresNameThePath) {
   const Taught& t = taught();
   const core::features::FeatureExtractorOptions extractor;
-  const fs::path scratch_dir = scratch("disk");
+  const test::TempDir scratch("pepper_ceiling_memory_disk");
+  const fs::path& scratch_dir = scratch.path();
 
   // The folder cannot be created: its parent is a file, or does not exist.
   const fs::path file = scratch_dir / "a_file";
@@ -377,7 +370,6 @@ TEST(CeilingTeachMemory, DiskFailuresNameThePath) {
       EXPECT_THAT(e.what(), HasSubstr(last.string())) << e.what();
     }
   }
-  fs::remove_all(scratch_dir);
 }
 
 // The store on its own: the pixels back bit for bit, and what the images cost on disk at VGA
