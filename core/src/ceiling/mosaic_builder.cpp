@@ -60,6 +60,15 @@ void LoopClosureOptions::check() const {
   if (min_inliers < 3) throw std::invalid_argument("MosaicBuilder: loop.min_inliers must be >= 3");
   if (!(std::isfinite(min_error_m) && min_error_m >= 0.0))
     throw std::invalid_argument("MosaicBuilder: loop.min_error_m must be finite and >= 0");
+  const std::pair<const char*, double> bounds[] = {
+      {"max_correction_m", max_correction_m}, {"max_correction_per_m", max_correction_per_m},
+      {"max_correction_rad", max_correction_rad},
+      {"max_correction_per_rad", max_correction_per_rad}};
+  for (const auto& [name, value] : bounds) {
+    if (!(std::isfinite(value) && value >= 0.0))
+      throw std::invalid_argument(std::string("MosaicBuilder: loop.") + name +
+                                  " must be finite and >= 0");
+  }
 }
 
 void RelocalisationOptions::check() const {
@@ -138,6 +147,7 @@ void MosaicBuilder::add_landmark(const cv::Point2d& p_m, double orientation_rad,
   l.observations = 1;
   l.last_seen_frame = frame;
   l.created_travelled_m = travelled_m_;
+  l.created_turned_rad = turned_rad_;
   l.last_seen_travelled_m = travelled_m_;
   landmarks_.push_back(std::move(l));
   insert_in_grid(landmarks_.size() - 1);
@@ -164,7 +174,8 @@ void MosaicBuilder::prune(int64_t frame) {
   }
 }
 
-MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
+MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs,
+                                           const std::optional<OdometryPose>& odom) {
   if (obs.descriptors.rows != static_cast<int>(obs.size()) ||
       obs.orientation_base_rad.size() != obs.size() || obs.p_canon_px.size() != obs.size() ||
       obs.orientation_canon_rad.size() != obs.size())
@@ -189,7 +200,16 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
     }
     result.added = static_cast<int>(n);
     frames_.push_back(result);
+    odom_at_good_ = odom;
     return result;
+  }
+
+  // The odometry's prediction of this frame's pose: the last fitted frame's pose moved by the
+  // odometry since that frame.
+  auto as_pose = [](const OdometryPose& p) { return PlanarPose{p.x_m, p.y_m, p.yaw_rad}; };
+  std::optional<PlanarPose> predicted;
+  if (options_.odometry_prior && odom && odom_at_good_) {
+    predicted = last_pose_ * (as_pose(*odom_at_good_).inverse() * as_pose(*odom));
   }
 
   // With loop closure, the landmarks not seen for loop.min_gap_m of travel ("old") are matched
@@ -213,14 +233,16 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
       fit = fit_pairs(pairs);
     }
   };
-  match_from(last_pose_);
-  if (!fit.found) {
+  match_from(predicted.value_or(last_pose_));
+  if (!fit.found && !predicted) {
     // Lost: a search without a prior may give the frame a prior the guided matching can use.
+    // (With odometry the guided matching already searched where the robot is; a search
+    // elsewhere could only find a place the odometry contradicts.)
     if (const std::optional<PlanarPose> T_fix = relocalise(obs, false)) {
       match_from(*T_fix);
       result.relocalised = fit.found;
     }
-  } else if (lost_frames_ > 0) {
+  } else if (fit.found && lost_frames_ > 0 && !predicted) {
     // Posed again by the guided matching after a loss: from a last good pose that may be far
     // behind, a repeated ceiling (tiles) can lock it onto the wrong place. Checked once against
     // a search without a prior: where the two disagree, the prior whose fit explains more of the
@@ -267,11 +289,27 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
     }
     for (const Pair& p : check.old_pairs) claimed[p.obs] = 1;
     travelled_m_ = travelled_m;
+    turned_rad_ += std::abs(wrap_angle_rad(fit.T_dst_src.theta_rad - last_pose_.theta_rad));
   }
   result.travelled_m = travelled_m_;
   std::vector<int> match_of_obs(n, -1);
   for (size_t p = 0; p < pairs.size(); ++p) match_of_obs[pairs[p].obs] = static_cast<int>(p);
   result.matches = static_cast<int>(pairs.size());
+  if (!fit.found && predicted && n > 0) {
+    // No fit, but the odometry knows where the robot is: the view is ceiling the mosaic does not
+    // have yet (a turn into a new corridor whose start a wall hid) or too little of it. The frame
+    // is posed by the odometry and its unmatched landmarks become candidates there, so that the
+    // next frames chain on them; the prior stays the last fitted pose moved by the odometry.
+    result.localised = true;
+    result.odometry_posed = true;
+    result.T_mosaic_base = *predicted;
+    result.travelled_m =
+        travelled_m_ + std::hypot(predicted->x_m - last_pose_.x_m, predicted->y_m - last_pose_.y_m);
+    add_new_landmarks(obs, *predicted, match_of_obs, std::vector<uint8_t>(n, 0), frame, result);
+    frames_.push_back(result);
+    prune(frame);
+    return result;
+  }
   if (!fit.found) {
     ++lost_frames_;
     frames_.push_back(result);
@@ -293,6 +331,7 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
   }
   last_pose_ = fit.T_dst_src;
   last_good_frame_ = frame;
+  odom_at_good_ = odom;
   lost_frames_ = 0;
   loss_attempts_ = 0;
   lost_localiser_.reset();
@@ -307,25 +346,34 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs) {
     l.last_seen_travelled_m = travelled_m_;
     sighting(l.id, i);
   }
-  // Unmatched observations become candidates, chained through this frame's pose; those matched
-  // but rejected by RANSAC do not (their match may be wrong, the point may be off the plane).
-  const bool create = std::hypot(last_pose_.x_m - creation_pose_.x_m,
-                                 last_pose_.y_m - creation_pose_.y_m) >= options_.landmark_step_m ||
-                      std::abs(wrap_angle_rad(last_pose_.theta_rad - creation_pose_.theta_rad)) >=
-                          options_.landmark_step_rad;
-  if (create) creation_pose_ = last_pose_;
-  for (size_t i = 0; i < n && create; ++i) {
-    if (match_of_obs[i] >= 0 || claimed[i]) continue;
-    const cv::Point2d p_m = last_pose_.apply(obs.p_base_m[i]);
-    if (options_.min_separation_m > 0.0 && !near(p_m, options_.min_separation_m).empty()) continue;
-    add_landmark(p_m, last_pose_.theta_rad + obs.orientation_base_rad[i],
-                 obs.descriptors.row(static_cast<int>(i)), frame);
-    sighting(landmarks_.back().id, i);
-    ++result.added;
-  }
+  add_new_landmarks(obs, last_pose_, match_of_obs, claimed, frame, result);
   frames_.push_back(result);
   prune(frame);
   return result;
+}
+
+void MosaicBuilder::add_new_landmarks(const CeilingObservation& obs, const PlanarPose& T,
+                                      const std::vector<int>& match_of_obs,
+                                      const std::vector<uint8_t>& claimed, int64_t frame,
+                                      MosaicFrameResult& result) {
+  // Unmatched observations become candidates, chained through this frame's pose; those matched
+  // but rejected by RANSAC do not (their match may be wrong, the point may be off the plane).
+  const bool create =
+      std::hypot(T.x_m - creation_pose_.x_m, T.y_m - creation_pose_.y_m) >=
+          options_.landmark_step_m ||
+      std::abs(wrap_angle_rad(T.theta_rad - creation_pose_.theta_rad)) >= options_.landmark_step_rad;
+  if (!create) return;
+  creation_pose_ = T;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    if (match_of_obs[i] >= 0 || claimed[i]) continue;
+    const cv::Point2d p_m = T.apply(obs.p_base_m[i]);
+    if (options_.min_separation_m > 0.0 && !near(p_m, options_.min_separation_m).empty()) continue;
+    add_landmark(p_m, T.theta_rad + obs.orientation_base_rad[i],
+                 obs.descriptors.row(static_cast<int>(i)), frame);
+    result.sightings.push_back(
+        {landmarks_.back().id, cv::Point2d(obs.p_canon_px[i]), obs.orientation_canon_rad[i]});
+    ++result.added;
+  }
 }
 
 // A search without a prior after a loss (see the header's comment): on a lost frame, due on the
@@ -460,11 +508,12 @@ MosaicBuilder::LoopCheck MosaicBuilder::close_loop(const CeilingObservation& obs
   if (!old_fit.found) return check;
 
   // 3. Against the frame's pose on the recent chain (T_mosaic_base: the old were left out).
-  std::vector<double> misplaced, created;
+  std::vector<double> misplaced, created, created_turned;
   for (size_t j = 0; j < old_src.size(); ++j) {
     if (!old_fit.inlier[j]) continue;
     misplaced.push_back(cv::norm(T_mosaic_base.apply(old_src[j]) - old_dst[j]));
     created.push_back(landmarks_[check.old_pairs[j].slot].created_travelled_m);
+    created_turned.push_back(landmarks_[check.old_pairs[j].slot].created_turned_rad);
   }
   const double error_m = median(misplaced);
   if (error_m <= lo.min_error_m) {
@@ -482,6 +531,21 @@ MosaicBuilder::LoopCheck MosaicBuilder::close_loop(const CeilingObservation& obs
   closure.old_inliers = old_fit.inliers;
   closure.error_before_m = error_m;
   const double span_m = std::max(travelled_m - closure.from_travelled_m, 1e-9);
+  // A chain drifts by a small fraction of what it travelled and turned since the loop's start: a
+  // correction beyond that is a false closure (a repeated or symmetric ceiling: plain tiles look
+  // the same a tile away and turned by a right angle), not drift. Refused: the frame stays on the
+  // recent chain and the old landmarks are left out of its fit.
+  const double turned_now_rad =
+      turned_rad_ + std::abs(wrap_angle_rad(T_mosaic_base.theta_rad - last_pose_.theta_rad));
+  const double turn_span_rad = std::max(turned_now_rad - median(created_turned), 0.0);
+  const double moved_m = std::hypot(old_fit.T_dst_src.x_m - T_mosaic_base.x_m,
+                                    old_fit.T_dst_src.y_m - T_mosaic_base.y_m);
+  if (moved_m > lo.max_correction_m + lo.max_correction_per_m * span_m ||
+      std::abs(wrap_angle_rad(closure.T_corrected_chained.theta_rad)) >
+          lo.max_correction_rad + lo.max_correction_per_rad * turn_span_rad) {
+    ++implausible_closures_;
+    return check;
+  }
   auto correction = [&](double s_m) {
     return se2_power(closure.T_corrected_chained,
                      std::clamp((s_m - closure.from_travelled_m) / span_m, 0.0, 1.0));

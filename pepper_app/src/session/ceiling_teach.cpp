@@ -261,7 +261,7 @@ cc::MosaicFrameResult CeilingTeacher::add_frame(const core::Frame& frame, double
   // The image to disk now (the relay images are chosen at the end), before the builder's step:
   // a failed write leaves the teacher as it was, so the frames so far still make a map.
   store_->put(frames_.size(), frame.gray);
-  cc::MosaicFrameResult r = builder_.add_frame(obs);
+  cc::MosaicFrameResult r = builder_.add_frame(obs, frame.odom);
   if (!r.localised) ++unlocalised_;
   frames_.push_back({frame.t_ns, travelled_m, frame.odom});
   return r;
@@ -305,7 +305,21 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
   out.tour.frames = static_cast<int64_t>(frames_.size());
   out.tour.ceiling = cc::TaughtCeiling{setup_.ceiling_height_m, setup_.camera.ceiling_above_cam_m};
   out.tour.unlocalised_frames = unlocalised_;
-  for (const size_t b : relays.breaks) out.tour.breaks.push_back(static_cast<int64_t>(b));
+  // A pair of relay images that fails the paper's conditions (too few shared landmarks: the
+  // ceiling was plain or hidden between them) is still one chain where the builder posed every
+  // frame from the one to the other, by a fit or, through a loss, by the odometry prior, and
+  // none was re-localised without the odometry: the two relay poses are consistent and the
+  // replay drives between them on its own odometry where it finds no fix. Only the others, where
+  // the chain itself was cut, are breaks (docs/method/ceiling.md "The odometry as the motion
+  // prior").
+  for (const size_t b : relays.breaks) {
+    const size_t from = relays.relay_frames.at(b), to = relays.relay_frames.at(b + 1);
+    bool chained = true;
+    for (size_t f = from; f <= to && chained; ++f) {
+      chained = results.at(f).localised && (f == from || !results.at(f).relocalised);
+    }
+    if (!chained) out.tour.breaks.push_back(static_cast<int64_t>(b));
+  }
   const double first_m = frames_.front().travelled_m, last_m = frames_.back().travelled_m;
   out.tour.driven_m = std::isfinite(first_m) && std::isfinite(last_m) ? last_m - first_m : 0.0;
 

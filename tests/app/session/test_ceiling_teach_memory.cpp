@@ -166,7 +166,7 @@ TEST(CeilingTeachMemory, MapIsTheOneTheImagesKeptInMemoryGive) {
     cv::Mat seen;
     const cv::Mat canonical = view.warp(f.gray, &seen);
     builder.add_frame(
-        cc::observe(view, t.setup.cam_in_base_m, cc::extract_landmarks(canonical, seen)));
+        cc::observe(view, t.setup.cam_in_base_m, cc::extract_landmarks(canonical, seen)), f.odom);
   }
   const cc::RelaySelection relays =
       cc::select_relay_images(builder.kept_sightings(), options.relay);

@@ -44,6 +44,7 @@ struct TeachRun {
   Mosaic mosaic;
   std::vector<MosaicFrameResult> frames;
   std::vector<LoopClosure> closures;
+  int64_t implausible_closures = 0;
   std::map<int64_t, int> point_of_id;  // kept landmark -> true ceiling point
   std::map<int64_t, double> error_of_id;
   int duplicated_points = 0;  // true points with more than one kept landmark
@@ -66,6 +67,7 @@ TeachRun teach(const Path& path, const MosaicBuilderOptions& options, const Erro
   run.mosaic = builder.mosaic();
   run.frames = builder.frames();
   run.closures = builder.loop_closures();
+  run.implausible_closures = builder.implausible_closures();
   if (run.mosaic.landmarks.empty()) return run;
   // Each kept landmark's true point: the nearest true descriptor (a sighting is ~26 bits from
   // it, a junk descriptor ~128 from every one). The mosaic frame is the first true pose.
@@ -215,6 +217,31 @@ TEST(MosaicLoopClosure, ALoopClosesWithTheLandmarksAtTheClosurePlacedWithinTheBo
   }
 }
 
+// The same loop with bounds on a correction tighter than its drift (the closure moves the frame
+// by a few centimetres): refused as implausible, the chain stays as without closure. With the
+// defaults (10 cm + 3 % of the loop, 0.05 rad + 5 % of its turns) it closed above; on a
+// generated room's plain tiles a false closure would have moved the chain by 5 m and 3 rad.
+TEST(MosaicLoopClosure, ACorrectionBeyondWhatAChainDriftsIsRefused) {
+  const Path path = rounded_rectangle(1.5);
+  MosaicBuilderOptions tight;
+  tight.loop.max_correction_m = 0.01;
+  tight.loop.max_correction_per_m = 0.0;
+  const TeachRun run = teach(path, tight, {}, 7);
+  const TeachRun open = teach(path, without_loops(), {}, 7);
+  EXPECT_TRUE(run.closures.empty());
+  EXPECT_GE(run.implausible_closures, 1);
+  // Refused closures leave the chain as without the feature up to the start's landmarks.
+  for (size_t k = 0; k + 100 < path.back_at_start; ++k) {
+    ASSERT_EQ(run.frames[k].localised, open.frames[k].localised) << k;
+    EXPECT_EQ(run.frames[k].T_mosaic_base.x_m, open.frames[k].T_mosaic_base.x_m) << k;
+  }
+  tight = {};
+  tight.loop.max_correction_rad = 0.0;
+  tight.loop.max_correction_per_rad = 0.0;
+  EXPECT_TRUE(teach(path, tight, {}, 7).closures.empty());
+  EXPECT_EQ(teach(path, {}, {}, 7).implausible_closures, 0);
+}
+
 // With a guided search narrower than the drift, the builder without closure does not find the
 // start's landmarks and maps those ceiling points a second time; the closure matches them within
 // its own (wider) radius and never creates a landmark for a frame landmark matched to an old one.
@@ -335,6 +362,9 @@ TEST(MosaicLoopClosure, RefusesBadOptionsNamingTheField) {
   o = {};
   o.loop.min_error_m = -0.01;
   EXPECT_NE(message(o).find("loop.min_error_m"), std::string::npos);
+  o = {};
+  o.loop.max_correction_per_rad = -1.0;
+  EXPECT_NE(message(o).find("loop.max_correction_per_rad"), std::string::npos);
   o = {};
   o.loop.enabled = false;
   o.loop.min_error_m = -0.01;  // validated even when off: the options are what a map records

@@ -54,7 +54,9 @@ struct CeilingTour {
   int64_t frames = 0;                          ///< frames given to the builder
   int64_t unlocalised_frames = 0;              ///< of them, frames the builder found no pose for
   std::vector<RelayImageRecord> relay_images;  ///< increasing frames, >= 2
-  std::vector<int64_t> breaks;  ///< i: relay i -> i + 1 violates the conditions (relay_images.hpp)
+  /// i: relay i -> i + 1 violates the conditions (relay_images.hpp) and the teach's chain was
+  /// cut between them (no odometry carried it; ceiling_teach.cpp)
+  std::vector<int64_t> breaks;
   /// Distance between the chained pose and the robot's odometry at the last localised frame,
   /// both relative to the first frame, m; nullopt without odometry. Either may have drifted.
   std::optional<double> odometry_disagreement_m;

@@ -21,9 +21,9 @@
 // counter-clockwise seen from above). Poses chained this way drift with the distance driven; the
 // drift measured on sim renders is in docs/method/ceiling.md.
 //
-// Matching is guided by the previous pose (frames are consecutive video frames): a frame landmark
-// is compared only with mosaic landmarks within `search_radius_m` of where the previous pose puts
-// it, best Hamming distance <= `max_hamming`, each mosaic landmark used once. A frame without
+// Matching is guided by the previous pose (frames are consecutive video frames; with odometry,
+// by its prediction, below): a frame landmark is compared only with mosaic landmarks within
+// `search_radius_m` of where that pose puts it, best Hamming distance <= `max_hamming`, each mosaic landmark used once. A frame without
 // consensus (too few inliers) is reported as not localised and adds nothing; the next frame is
 // matched with the last good pose.
 //
@@ -41,12 +41,24 @@
 // landmarks more than the RANSAC threshold apart, the one whose fit has more inliers wins. The
 // chained distance `travelled_m` grows across the gap by the straight line from the last good pose
 // to the re-localised one (a lower bound of the path driven blind; it is also what a frame found
-// again by the guided matching after a loss adds). Lost frames still add nothing. Nothing is
-// compared with where the chain was before the loss (the motion while lost is unknown), so what
-// was built before the gap keeps its drift. No motion gate: a fix may be anywhere on the mosaic
-// (a teach may pause its recording and resume elsewhere), so a ceiling that repeats an earlier
-// part exactly would be taken for it. A teach that never loses the ceiling is built exactly as
+// again by the guided matching after a loss adds). Lost frames still add nothing. Without odometry
+// nothing is compared with where the chain was before the loss (the motion while lost is
+// unknown), so what was built before the gap keeps its drift, and there is no motion gate: a fix
+// may be anywhere on the mosaic, so a ceiling that repeats an earlier part exactly would be
+// taken for it. With odometry there is no search without a prior (below). A teach that never loses the ceiling is built exactly as
 // without the feature (relocalisation.enabled = false).
+//
+// The odometry as the motion prior (docs/method/ceiling.md, "The odometry as the motion prior"):
+// where the frames carry the robot's odometry, the guided matching starts from the last fitted
+// frame's pose moved by the odometry since then, not from that pose itself, and the search
+// without a prior is not used (it could only find a place the odometry contradicts). Through a
+// loss (a turn at a corridor's end where the ceiling is plain tiles or hidden by a wall) the
+// prior keeps up with the robot, so the first frame that sees enough again is matched where the
+// robot is, not a tile away. A frame that has no fit is posed by the prediction
+// (`odometry_posed`) and its unmatched landmarks become candidates there: after a turn into a
+// corridor whose ceiling a wall hid, the view is new ceiling that nothing in the mosaic matches,
+// and without this the teach would stay lost. Without odometry readings everything is as
+// described above.
 //
 // Loop closure (docs/method/ceiling.md, "Closing a loop"): a teach that comes back under ceiling
 // it mapped long before re-observes *old* landmarks (kept, and not seen as an inlier for
@@ -77,6 +89,7 @@
 #include "core/ceiling/mosaic_localiser.hpp"
 #include "core/ceiling/observation.hpp"
 #include "core/ceiling/planar_rigid.hpp"
+#include "core/odometry.hpp"
 
 namespace pepper::core::ceiling {
 
@@ -98,6 +111,16 @@ struct LoopClosureOptions {
   /// inliers of the ordinary fit anyway; on renders they are misplaced by 10-20 mm with no
   /// drift to correct, and correcting on that noise made things worse.
   double min_error_m = 0.03;
+  /// A closure may move the frame's pose by at most max_correction_m + max_correction_per_m x
+  /// the chained travel since the loop's start, and turn it by at most max_correction_rad +
+  /// max_correction_per_rad x the chain's rotation since then (>= 0): a chain drifts by a small
+  /// fraction of that (0.4 % of the test tour); a larger correction is a false closure on a
+  /// repeated or symmetric ceiling (on a generated room's plain tiles: a room away, turned by
+  /// 3 rad), refused (implausible_closures()).
+  double max_correction_m = 0.1;
+  double max_correction_per_m = 0.03;
+  double max_correction_rad = 0.05;
+  double max_correction_per_rad = 0.05;
 
   /// Throws std::invalid_argument naming the first invalid field (as "loop.<field>").
   void check() const;
@@ -131,6 +154,8 @@ struct MosaicBuilderOptions {
   RigidRansacOptions ransac{0.03, 10, 300, 1};
   LoopClosureOptions loop;
   RelocalisationOptions relocalisation;
+  /// The odometry as the motion prior (see the header's comment); false: as without readings.
+  bool odometry_prior = true;
 
   /// Throws std::invalid_argument naming the first invalid field.
   void check() const;
@@ -158,6 +183,9 @@ struct MosaicFrameResult {
   /// frame posed again where the search overruled the guided matching
   /// (MosaicBuilder::relocalisations()).
   bool relocalised = false;
+  /// No fit, but the frame was posed by the odometry's prediction (the odometry prior): its
+  /// unmatched landmarks became candidates there (localised is true, inliers 0).
+  bool odometry_posed = false;
 };
 
 /// One loop closure: what was corrected.
@@ -185,8 +213,12 @@ class MosaicBuilder {
  public:
   explicit MosaicBuilder(MosaicBuilderOptions options = {});
 
-  /// Adds one frame's observation (consecutive frames of one teach).
-  MosaicFrameResult add_frame(const CeilingObservation& observation);
+  /// Adds one frame's observation (consecutive frames of one teach). `odom`: the robot's
+  /// odometry read with this frame (x forward, y left, yaw counter-clockwise, any fixed origin);
+  /// nullopt when the robot reports none (then the previous pose is the prior, as without
+  /// odometry_prior).
+  MosaicFrameResult add_frame(const CeilingObservation& observation,
+                              const std::optional<OdometryPose>& odom = std::nullopt);
 
   /// The kept landmarks (>= min_observations inlier sightings) as a valid Mosaic.
   Mosaic mosaic() const;
@@ -199,6 +231,9 @@ class MosaicBuilder {
   size_t candidates() const;
   /// The loop closures so far, in order.
   const std::vector<LoopClosure>& loop_closures() const { return closures_; }
+  /// Loop closures refused because their correction was beyond what a chain drifts
+  /// (LoopClosureOptions::max_correction_*).
+  int64_t implausible_closures() const { return implausible_closures_; }
   /// The re-localisations so far, in order.
   const std::vector<Relocalisation>& relocalisations() const { return relocalisations_; }
   /// Searches without a prior so far (each one the cost stated in RelocalisationOptions).
@@ -213,6 +248,7 @@ class MosaicBuilder {
     int observations = 0;
     int64_t last_seen_frame = -1;
     double created_travelled_m = 0.0;    // the chain's travelled distance at creation
+    double created_turned_rad = 0.0;     // the chain's rotation (sum of |turns|) at creation
     double last_seen_travelled_m = 0.0;  // ... at the last inlier sighting
     bool alive() const { return observations > 0; }
   };
@@ -225,6 +261,11 @@ class MosaicBuilder {
   std::vector<size_t> near(const cv::Point2d& p_m, double radius_m) const;
   void add_landmark(const cv::Point2d& p_m, double orientation_rad, const cv::Mat& descriptor,
                     int64_t frame);
+  // The frame's unmatched, unclaimed landmarks as new candidates placed by T (when the base moved
+  // or turned enough since the last creation), with their sightings.
+  void add_new_landmarks(const CeilingObservation& obs, const PlanarPose& T,
+                         const std::vector<int>& match_of_obs, const std::vector<uint8_t>& claimed,
+                         int64_t frame, MosaicFrameResult& result);
   void prune(int64_t frame);
   void rebuild_grid();
   // Guided matching from `prior`; with `skip_old`, old landmarks (old_landmark) are left to
@@ -256,6 +297,8 @@ class MosaicBuilder {
   PlanarPose creation_pose_;  // pose of the last frame that added landmarks
   double travelled_m_ = 0.0;  // chained path length up to the last localised frame (the "now"
                               // of old_landmark while a frame is added)
+  double turned_rad_ = 0.0;   // the chain's rotation (sum of |turns|) up to that frame
+  int64_t implausible_closures_ = 0;
   std::vector<LoopClosure> closures_;
   // Re-localisation: frames without a pose since the last good one, the localiser over the kept
   // landmarks (built at a loss's first search; the kept landmarks do not change while lost).
@@ -265,6 +308,8 @@ class MosaicBuilder {
   std::optional<MosaicLocaliser> lost_localiser_;
   std::vector<Relocalisation> relocalisations_;
   int64_t relocalisation_attempts_ = 0;
+  // The odometry prior: the reading of the last fitted frame.
+  std::optional<OdometryPose> odom_at_good_;
 };
 
 }  // namespace pepper::core::ceiling
