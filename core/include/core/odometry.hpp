@@ -17,4 +17,14 @@ struct OdometryPose {
   double yaw_rad = 0.0;  ///< counter-clockwise from the odometry frame's x axis
 };
 
+/// Bounds of the wheel odometry's systematic errors, per metre driven and per radian turned:
+/// margins above the mock's model of wheel odometry (1.5 % of the distance, 3 % of each turn,
+/// 0.001 rad/s of heading drift while moving; docs/mock_robot.md "Odometry"), not measured on a
+/// real Pepper. The forward navigator grows its estimate's sigmas with them
+/// (navigator/navigator.cpp), the ceiling navigator the error of its coasting
+/// (ceiling/ceiling_navigator.hpp).
+inline constexpr double kOdometryDistanceErrorPerM = 0.03;
+inline constexpr double kOdometryYawErrorPerRad = 0.05;
+inline constexpr double kOdometryYawErrorPerM = 0.01;
+
 }  // namespace pepper::core

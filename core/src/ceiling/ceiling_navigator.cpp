@@ -33,7 +33,7 @@ std::vector<std::string> CeilingNavigatorOptions::validate() const {
   if (!(max_forward_m > 0.0)) e.push_back("max_forward_m must be > 0");
   if (!(arc_min_turn_rad >= 0.0)) e.push_back("arc_min_turn_rad must be >= 0");
   if (!(turn_in_place_gain_1_s > 0.0)) e.push_back("turn_in_place_gain_1_s must be > 0");
-  if (!(coast_max_m >= 0.0)) e.push_back("coast_max_m must be >= 0");
+  if (!(coast_max_error_m >= 0.0)) e.push_back("coast_max_error_m must be >= 0");
   if (!(coast_max_s >= 0.0)) e.push_back("coast_max_s must be >= 0");
   for (const auto& m : vnhv.validate()) e.push_back("vnhv: " + m);
   for (const auto& m : schedule.validate()) e.push_back("schedule: " + m);
@@ -217,6 +217,17 @@ CeilingStepResult CeilingNavigator::step_observation(const CeilingObservation& o
   const auto t_loc = Clock::now();
   const bool tracking = state_ == nav::NavState::kNavigating ||
                         state_ == nav::NavState::kDeadReckoning;
+  // The odometry's possible error since the last fix grows with this frame's motion.
+  if (odom && prev_odom_) {
+    const PlanarPose o0{prev_odom_->x_m, prev_odom_->y_m, prev_odom_->yaw_rad};
+    const PlanarPose o1{odom->x_m, odom->y_m, odom->yaw_rad};
+    const PlanarPose step = o0.inverse() * o1;
+    const double d_m = std::hypot(step.x_m, step.y_m);
+    coast_heading_error_rad_ += kOdometryYawErrorPerRad * std::abs(wrap_angle_rad(step.theta_rad)) +
+                                kOdometryYawErrorPerM * d_m;
+    coast_error_m_ += (kOdometryDistanceErrorPerM + coast_heading_error_rad_) * d_m;
+  }
+  prev_odom_ = odom;
   std::optional<PlanarPose> predicted;
   if (tracking && last_fix_ && last_fix_odom_ && odom) {
     const PlanarPose o0{last_fix_odom_->x_m, last_fix_odom_->y_m, last_fix_odom_->yaw_rad};
@@ -254,16 +265,18 @@ CeilingStepResult CeilingNavigator::step_observation(const CeilingObservation& o
     last_fix_ = pose;
     last_fix_t_ns_ = t_ns;
     last_fix_odom_ = odom;
+    coast_heading_error_rad_ = coast_error_m_ = 0.0;
     ct.coasted_m = 0.0;
     if (next_ < 0) next_ = nearest_segment(pose) + 1;
     if (state_ != nav::NavState::kNavigating) schedule_.reset();
     state_ = nav::NavState::kNavigating;
-  } else if (tracking && predicted && last_fix_odom_ && odom && options_.coast_max_m > 0.0 &&
-             ct.coasted_m <= options_.coast_max_m &&
+  } else if (tracking && predicted && last_fix_odom_ && odom && options_.coast_max_error_m > 0.0 &&
+             coast_error_m_ <= options_.coast_max_error_m &&
              (t_ns - last_fix_t_ns_) * 1e-9 <= options_.coast_max_s) {
     pose = *predicted;
     state_ = nav::NavState::kDeadReckoning;
     tel.dead_reckoned_m = ct.coasted_m;
+    ct.coast_error_m = coast_error_m_;
   } else {
     last_pose_.reset();
     return finish(state_ == nav::NavState::kNotLocalized

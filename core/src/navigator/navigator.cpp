@@ -241,26 +241,22 @@ constexpr double kFloorLineMaxAngleRad = 0.5;
 
 // The heading of the odometry estimate has a sigma (errors_, estimate_errors.hpp), the
 // odometry's error model: it grows by kOdometryYawErrorPerRad of every turn and
-// kOdometryYawErrorPerM per metre (margins above the mock's model of wheel odometry, 3 % of the
-// turn and 0.001 rad/s of bias, docs/mock_robot.md "Odometry"; not measured on a real Pepper), is
+// kOdometryYawErrorPerM per metre (core/odometry.hpp), is
 // kPlacedHeadingSigmaRad when a (re)localisation places the estimate at a key image's taught
 // pose, and shrinks with each VNHV fix (kFixErrors below). Where no VNHV fix corrects the
 // estimate, the heading relative to IN from the matched horizontal lines (geometry/line_yaw.hpp)
 // corrects the heading, as the room's or a moved object's (kLineYawErrors below).
-constexpr double kOdometryYawErrorPerRad = 0.05;
-constexpr double kOdometryYawErrorPerM = 0.01;
 constexpr double kPlacedHeadingSigmaRad = 0.1;
 constexpr double kMinLineYawSigmaRad = 0.005;  // the lines' own sigma, floored: sway, lens
 constexpr double kHeadingGateSigmas = 3.0;
 // The estimate's position sigmas along and across the robot's heading (errors_: along and
 // across), the same kind of model: along grows by kOdometryDistanceErrorPerM of every
-// metre (a margin above the mock's 1.5 % scale error), across by the heading's sigma times the
+// metre (core/odometry.hpp), across by the heading's sigma times the
 // metre (a heading error turns into a sideways one); both are kPlacedPositionSigmaM when a
 // (re)localisation places the estimate at a key image's taught pose (starts are up to 0.4 m along
 // and 0.2 m across from it), and shrink with each VNHV fix (kFixErrors below). A lateral sigma of
 // kLocatedLateralSigmaM or less counts as located across the path (floor lines: the odometry may
 // steer, as after a VNHV fix).
-constexpr double kOdometryDistanceErrorPerM = 0.03;
 constexpr double kPlacedPositionSigmaM = 0.5;
 constexpr double kLocatedLateralSigmaM = 0.03;
 // A VNHV fix's error is mostly its segment's, shared by every fix of the segment, and of one of

@@ -34,6 +34,9 @@ const char* removed_key(const std::string& key) {
        "was off (odometry steers where VNHV has no estimate; delete the key)"},
       {"navigator.turn_feedforward_max_lead_rad",
        "removed with the taught-turn feed-forward it capped (delete the key)"},
+      {"ceiling.coast_max_m",
+       "replaced by ceiling.coast_max_error_m: coasting now ends when the odometry's error "
+       "model says the pose may be that far off, not after a fixed distance (delete the key)"},
   };
   for (const auto& [k, why] : kRemoved) {
     if (key == k) return why;
@@ -157,7 +160,7 @@ core::ceiling::CeilingNavigatorOptions AppConfig::ceiling_navigator_options() co
   c.schedule = navigator.schedule;
   c.arc_min_turn_rad = ceiling.arc_min_turn_rad;
   c.turn_in_place_gain_1_s = ceiling.turn_in_place_gain_1_s;
-  c.coast_max_m = ceiling.coast_max_m;
+  c.coast_max_error_m = ceiling.coast_max_error_m;
   c.coast_max_s = ceiling.coast_max_s;
   return c;
 }

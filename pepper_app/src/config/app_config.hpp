@@ -93,8 +93,8 @@ struct ReplayConfig {
 struct CeilingConfig {
   double arc_min_turn_rad = 0.1;        ///< relay segments turning more follow their arc
   double turn_in_place_gain_1_s = 1.0;  ///< facing too far off the path: turn on the spot
-  double coast_max_m = 0.3;             ///< no fix: coast on odometry at most this far
-  double coast_max_s = 2.0;             ///< and this long
+  double coast_max_error_m = 0.03;       ///< no fix: coast while the odometry may be this far off
+  double coast_max_s = 8.0;             ///< and at most this long since the last fix
 };
 
 struct UiConfig {

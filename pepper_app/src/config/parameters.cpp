@@ -717,11 +717,12 @@ std::vector<Parameter> build_table() {
     row("ceiling.turn_in_place_gain_1_s",
         ceiling, &CeilingConfig::turn_in_place_gain_1_s, "1/s", "(0, 5]",
         "heading beyond navigator.vnhv.max_abs_theta_rad: turn on the spot at this gain"),
-    row("ceiling.coast_max_m",
-        ceiling, &CeilingConfig::coast_max_m, "m", "[0, 2]",
-        "no fix against the mosaic: drive on odometry at most this far, then stop (0: stop)"),
+    row("ceiling.coast_max_error_m",
+        ceiling, &CeilingConfig::coast_max_error_m, "m", "[0, 0.5]",
+        "no fix against the mosaic: drive on odometry while its error model says the pose may "
+        "be at most this far off, then stop (0: stop)"),
     row("ceiling.coast_max_s",
-        ceiling, &CeilingConfig::coast_max_s, "s", "[0, 10]",
+        ceiling, &CeilingConfig::coast_max_s, "s", "[0, 20]",
         "and at most this long since the last fix"),
 
     // ui: UiConfig

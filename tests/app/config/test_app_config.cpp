@@ -81,6 +81,7 @@ TEST(AppConfig, ARemovedOptionSaysItWasRemoved) {
   expect_config_error(file, {}, "old.yaml: navigator.switching.passed_next_scale_ratio: removed");
   expect_config_error({}, {"navigator.switching.passed_next_scale_ratio=0"}, "delete the key");
   expect_config_error({}, {"navigator.turn_feedforward=1"}, "navigator.turn_feedforward: removed");
+  expect_config_error({}, {"ceiling.coast_max_m=0.3"}, "replaced by ceiling.coast_max_error_m");
 }
 
 TEST(AppConfig, SharedFeatureOptionsReachTeachAndReplay) {

@@ -20,10 +20,12 @@
 // turns, and switching at the normal hands the robot to the line that turns with the path.
 //
 // Localisation lost (no fix): with odometry in the frames the robot coasts on the odometry's
-// prediction of its pose from the last fix, for at most coast_max_m and coast_max_s, then stops
+// prediction of its pose from the last fix while the odometry's error model says that prediction
+// is within coast_max_error_m, and for at most coast_max_s, then stops
 // (state kLost, reason kFeaturesLost) and localises without a prior on every frame until a fix;
-// without odometry it stops at once. A relay segment listed in the tour's breaks (the teach lost
-// the ceiling there: no landmark links the two relay images) is never driven: stop for good,
+// without odometry it stops at once. A relay segment listed in the tour's breaks (the teach's
+// chain was cut there: no landmark and no odometry links the two relay images) is never driven:
+// stop for good,
 // reason kRelayBreak, state kLost, on every further frame.
 //
 // Frames and units: the mosaic frame (mosaic.hpp), base frame x forward, y left, metres,
@@ -70,12 +72,17 @@ struct CeilingNavigatorOptions {
   /// |heading| beyond vnhv.max_abs_theta_rad (the chained form is singular at pi/2): turn on the
   /// spot towards the segment's direction at this gain, 1/s, > 0.
   double turn_in_place_gain_1_s = 1.0;
-  /// Coasting on odometry without a fix: at most this far, m, >= 0 (0: stop at once), and this
-  /// long, s, >= 0, since the last fix. Why 0.3 m: odometry drifts ~2 % of the distance and a
-  /// degree or two per turn, so 0.3 m stay within about a centimetre of where a fix would put
-  /// the robot: coasting bridges short losses, it is not blind driving.
-  double coast_max_m = 0.3;
-  double coast_max_s = 2.0;
+  /// Coasting on odometry without a fix: while the odometry's error since the last fix may have
+  /// moved the robot at most coast_max_error_m, m, >= 0 (0: stop at once), and for at most
+  /// coast_max_s, s, >= 0. The error is the odometry's error model (core/odometry.hpp): its
+  /// heading error grows with every radian turned and metre driven, and every metre driven adds
+  /// that heading error plus the distance error. A turn on the spot adds heading error but no
+  /// position error until the robot drives on; 3 cm allow about 0.9 m straight on, or 0.4 m on
+  /// after a blind quarter turn (a corridor's end where the view is a wall). Time does not make
+  /// odometry drift: coast_max_s only bounds how long a robot may act on a stale fix (a U-turn
+  /// on the spot takes about 8 s).
+  double coast_max_error_m = 0.03;
+  double coast_max_s = 8.0;
 
   std::vector<std::string> validate() const;
 };
@@ -88,6 +95,7 @@ struct CeilingTelemetry {
   bool pose_known = false;     ///< T_mosaic_base below is this frame's (fix or coast)
   PlanarPose T_mosaic_base;    ///< the robot's pose used by the law
   double coasted_m = 0.0;      ///< odometry distance since the last fix
+  double coast_error_m = 0.0;  ///< the odometry's possible position error since the last fix
   double perceive_ms = 0.0, localise_ms = 0.0;  ///< wall clock, telemetry only
 };
 
@@ -144,6 +152,10 @@ class CeilingNavigator {
   std::optional<PlanarPose> last_fix_;
   int64_t last_fix_t_ns_ = 0;
   std::optional<OdometryPose> last_fix_odom_;
+  /// The odometry's possible errors since the last fix (coasting), and the previous reading.
+  double coast_heading_error_rad_ = 0.0;
+  double coast_error_m_ = 0.0;
+  std::optional<OdometryPose> prev_odom_;
   /// The pose of the previous frame (fix or coast): the next localisation's prior.
   std::optional<PlanarPose> last_pose_;
   bool broken_ = false;  ///< a relay break was reached: stopped for good
