@@ -15,7 +15,7 @@
 # Usage: bench/closed_loop/matrix.sh [--out DIR] [--app BIN] [--size WxH] [--starts N]
 #                                    [--gen-starts N] [--gen-seeds N]
 #                                    [--jobs N] [--shard I/N] [--only REGEX] [--list]
-#                                    [--set KEY=VALUE]...
+#                                    [--mode forward|ceiling] [--set KEY=VALUE]...
 #   --gen-starts N  starts per generated world (5); --gen-seeds N: seeds 1..N (20; 0: none)
 #   --shard I/N   run only configurations I, I+N, I+2N, ... (1-based) of the list
 #   --only REGEX  run only configurations whose name matches (e.g. 'robotics_room', 'light',
@@ -23,6 +23,8 @@
 #   --list        print the configuration names and exit
 #   --set K=V     passed to every `pepper_app evaluate` (repeatable): an ablation runs the matrix
 #                 with one navigator rule off, e.g. --set navigator.switching.min_next_scale_ratio=0
+#   --mode M      what the robot navigates by (evaluate --mode; forward by default): ceiling runs
+#                 the same configurations looking at the ceiling (issue 24)
 # Example (two sessions, each half of the matrix, then one table):
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 1/2
 #   bench/closed_loop/matrix.sh --out /work/eval/matrix --shard 2/2
@@ -55,7 +57,8 @@ while [[ $# -gt 0 ]]; do
     --only) ONLY=$2; shift 2 ;;
     --list) LIST=1; shift ;;
     --set) SETS+=(--set "$2"); shift 2 ;;
-    -h|--help) sed -n '2,31p' "$0"; exit 0 ;;
+    --mode) SETS+=(--mode "$2"); shift 2 ;;
+    -h|--help) sed -n '2,33p' "$0"; exit 0 ;;
     *) echo "matrix.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
