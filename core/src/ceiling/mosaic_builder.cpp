@@ -295,11 +295,12 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs,
   std::vector<int> match_of_obs(n, -1);
   for (size_t p = 0; p < pairs.size(); ++p) match_of_obs[pairs[p].obs] = static_cast<int>(p);
   result.matches = static_cast<int>(pairs.size());
-  if (!fit.found && predicted && n > 0) {
+  if (!fit.found && predicted) {
     // No fit, but the odometry knows where the robot is: the view is ceiling the mosaic does not
-    // have yet (a turn into a new corridor whose start a wall hid) or too little of it. The frame
-    // is posed by the odometry and its unmatched landmarks become candidates there, so that the
-    // next frames chain on them; the prior stays the last fitted pose moved by the odometry.
+    // have yet (a turn into a new corridor whose start a wall hid), too little of it, or none
+    // (the whole view a wall). The frame is posed by the odometry and its unmatched landmarks
+    // become candidates there, so that the next frames chain on them; the prior stays the last
+    // fitted pose moved by the odometry.
     result.localised = true;
     result.odometry_posed = true;
     result.T_mosaic_base = *predicted;

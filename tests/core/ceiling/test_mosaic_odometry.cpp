@@ -197,6 +197,26 @@ TEST(MosaicOdometry, ATurnOntoUnmappedCeilingIsChainedThroughTheOdometry) {
   EXPECT_LT(worst_m, 2.5 * turn_error_rad + 0.02 * 0.5 + 0.005);
 }
 
+// A frame that sees nothing at all (the whole view a wall) is posed by the odometry too, so the
+// chain is not cut there (a cut is a break of the relay chain, which the replay never drives);
+// without odometry it is lost.
+TEST(MosaicOdometry, AFrameThatSeesNothingIsPosedByTheOdometry) {
+  const SyntheticCeiling c = test_support::make_synthetic_ceiling(9, -1.0, 40, -1.5, 30);
+  std::mt19937 rng(2);
+  MosaicBuilder with, without;
+  for (int k = 0; k < 20; ++k) {
+    const PlanarPose truth{kStepM * k, 0.0, 0.0};
+    const CeilingObservation o = test_support::see_synthetic(c, truth, rng);
+    with.add_frame(o, OdometryPose{truth.x_m, 0.0, 0.0});
+    without.add_frame(o);
+  }
+  const MosaicFrameResult a = with.add_frame(CeilingObservation{}, OdometryPose{0.4, 0.0, 0.0});
+  EXPECT_TRUE(a.localised && a.odometry_posed);
+  EXPECT_NEAR(a.T_mosaic_base.x_m, 0.4, 1e-9);
+  EXPECT_EQ(a.added, 0);
+  EXPECT_FALSE(without.add_frame(CeilingObservation{}).localised);
+}
+
 // Readings given but the prior switched off: the build is the one without readings.
 TEST(MosaicOdometry, SwitchedOffItBuildsAsWithoutReadings) {
   const SyntheticCeiling c = tiled_ceiling(32);
