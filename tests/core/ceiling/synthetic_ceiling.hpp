@@ -14,6 +14,7 @@
 
 #include "core/ceiling/mosaic.hpp"
 #include "core/ceiling/mosaic_builder.hpp"
+#include "core/odometry.hpp"
 #include "core/ceiling/observation.hpp"
 #include "core/ceiling/planar_rigid.hpp"
 
@@ -154,5 +155,38 @@ class ChainErrorInjector {
   std::mt19937& rng_;
   std::normal_distribution<double> noise_;
 };
+
+/// A teach driven in legs of equal steps, some blind (the camera sees no ceiling point).
+struct SyntheticLeg {
+  PlanarPose step;  ///< T_prev_next per frame
+  int frames = 0;
+  bool blind = false;
+};
+
+/// The true base pose per frame, whether it is blind, and the wheel odometry: each true step
+/// with `odometry_scale` times its translation and rotation (1.02: 2 % too long and too much).
+struct SyntheticLegTour {
+  std::vector<PlanarPose> truth;  ///< T_world_base per frame
+  std::vector<uint8_t> blind;
+  std::vector<OdometryPose> odom;
+};
+
+inline SyntheticLegTour drive_legs(const PlanarPose& start, const std::vector<SyntheticLeg>& legs,
+                                   double odometry_scale = 1.02) {
+  SyntheticLegTour t;
+  PlanarPose p = start, o{0.0, 0.0, 0.0};
+  t.truth.push_back(p);
+  t.blind.push_back(0);
+  t.odom.push_back({0.0, 0.0, 0.0});
+  for (const SyntheticLeg& leg : legs)
+    for (int i = 0; i < leg.frames; ++i) {
+      t.truth.push_back(p = p * leg.step);
+      t.blind.push_back(leg.blind ? 1 : 0);
+      o = o * PlanarPose{odometry_scale * leg.step.x_m, odometry_scale * leg.step.y_m,
+                         odometry_scale * leg.step.theta_rad};
+      t.odom.push_back({o.x_m, o.y_m, o.theta_rad});
+    }
+  return t;
+}
 
 }  // namespace pepper::core::ceiling::test_support

@@ -50,33 +50,10 @@ SyntheticCeiling tiled_ceiling(uint32_t seed) {
   return c;
 }
 
-struct Leg {
-  PlanarPose step;  // T_prev_next per frame
-  int frames = 0;
-  bool blind = false;
-};
+using Leg = test_support::SyntheticLeg;
+using Tour = test_support::SyntheticLegTour;
 
-struct Tour {
-  std::vector<PlanarPose> truth;  // T_world_base per frame
-  std::vector<uint8_t> blind;
-  std::vector<OdometryPose> odom;  // each true step with 2 % more translation and rotation
-};
-
-Tour drive(const std::vector<Leg>& legs) {
-  Tour t;
-  PlanarPose p{0.0, 0.0, 0.0}, o{0.0, 0.0, 0.0};
-  t.truth.push_back(p);
-  t.blind.push_back(0);
-  t.odom.push_back({0.0, 0.0, 0.0});
-  for (const Leg& leg : legs)
-    for (int i = 0; i < leg.frames; ++i) {
-      t.truth.push_back(p = p * leg.step);
-      t.blind.push_back(leg.blind ? 1 : 0);
-      o = o * PlanarPose{1.02 * leg.step.x_m, 1.02 * leg.step.y_m, 1.02 * leg.step.theta_rad};
-      t.odom.push_back({o.x_m, o.y_m, o.theta_rad});
-    }
-  return t;
-}
+Tour drive(const std::vector<Leg>& legs) { return test_support::drive_legs({0.0, 0.0, 0.0}, legs); }
 
 // Down a corridor 3 m, a U-turn on the spot (left, 40 frames) and 0.2 m on without seeing the
 // ceiling, then 1.6 m back under the ceiling mapped on the way out.

@@ -28,28 +28,11 @@ using test_support::SyntheticCeiling;
 constexpr double kStepM = 0.02;  // between frames: 0.3 m/s at 15 Hz
 constexpr int kJunk = 10;        // junk landmarks in every frame, blind or not
 
-struct Leg {
-  PlanarPose step;  // T_prev_next per frame
-  int frames = 0;
-  bool blind = false;
-};
-
-struct Tour {
-  std::vector<PlanarPose> truth;  // T_world_base per frame
-  std::vector<uint8_t> blind;
-};
+using Leg = test_support::SyntheticLeg;
+using Tour = test_support::SyntheticLegTour;
 
 Tour drive(const PlanarPose& start, const std::vector<Leg>& legs) {
-  Tour t;
-  PlanarPose p = start;
-  t.truth.push_back(p);
-  t.blind.push_back(0);
-  for (const Leg& leg : legs)
-    for (int i = 0; i < leg.frames; ++i) {
-      t.truth.push_back(p = p * leg.step);
-      t.blind.push_back(leg.blind ? 1 : 0);
-    }
-  return t;
+  return test_support::drive_legs(start, legs);
 }
 
 struct TeachRun {
