@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 #include "core/ceiling/planar_rigid.hpp"
@@ -20,6 +21,10 @@ void RelayOptions::check() const {
   if (!(max_orientation_change_rad > 0.0 && max_orientation_change_rad < kPi))
     throw std::invalid_argument(
         "select_relay_images: max_orientation_change_rad must be in (0, pi)");
+  if (!(linked_step_m >= 0.0) || !std::isfinite(linked_step_m))
+    throw std::invalid_argument("select_relay_images: linked_step_m must be finite and >= 0");
+  if (!(linked_step_rad >= 0.0) || !std::isfinite(linked_step_rad))
+    throw std::invalid_argument("select_relay_images: linked_step_rad must be finite and >= 0");
 }
 
 RelayPairCheck check_relay_pair(const std::vector<LandmarkSighting>& a,
@@ -77,6 +82,31 @@ RelaySelection select_relay_images(const std::vector<std::vector<LandmarkSightin
   }
   if (last != frames.size() - 1) out.relay_frames.push_back(frames.size() - 1);
   return out;
+}
+
+std::vector<size_t> thin_linked_relays(const std::vector<PlanarPose>& relay_poses,
+                                       const std::vector<uint8_t>& linked, double min_step_m,
+                                       double min_step_rad) {
+  if (!relay_poses.empty() && linked.size() != relay_poses.size() - 1)
+    throw std::invalid_argument("thin_linked_relays: " + std::to_string(linked.size()) +
+                                " pair flags for " + std::to_string(relay_poses.size()) +
+                                " relay images");
+  if (!(min_step_m >= 0.0) || !(min_step_rad >= 0.0))
+    throw std::invalid_argument("thin_linked_relays: the steps must be >= 0");
+  std::vector<size_t> kept;
+  for (size_t i = 0; i < relay_poses.size(); ++i) {
+    // Inside a run: both the pair before and the pair after are linked.
+    const bool inside = i > 0 && i + 1 < relay_poses.size() && linked[i - 1] && linked[i];
+    if (inside) {
+      const PlanarPose& a = relay_poses[kept.back()];
+      const PlanarPose& b = relay_poses[i];
+      const bool far = std::hypot(b.x_m - a.x_m, b.y_m - a.y_m) >= min_step_m ||
+                       std::abs(wrap_angle_rad(b.theta_rad - a.theta_rad)) >= min_step_rad;
+      if (!far) continue;
+    }
+    kept.push_back(i);
+  }
+  return kept;
 }
 
 }  // namespace pepper::core::ceiling

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -283,10 +284,33 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
   const cc::RelaySelection relays = cc::select_relay_images(sightings, options_.relay);
   const auto& results = builder_.frames();
 
+  // A pair of relay images that fails the paper's conditions (too few shared landmarks: the
+  // ceiling was plain or hidden between them) is still one chain where the builder posed every
+  // frame from the one to the other, by a fit or, through a loss, by the odometry prior, and
+  // none was re-localised without the odometry: the two relay poses are consistent and the
+  // replay drives between them on its own odometry where it finds no fix (linked). Only the
+  // others, where the chain itself was cut, are breaks (docs/method/ceiling.md "The odometry as
+  // the motion prior"). Runs of linked pairs are thinned to relay images spaced for arcs.
+  const size_t n_relays = relays.relay_frames.size();
+  std::vector<uint8_t> cut(n_relays - 1, 0), linked(n_relays - 1, 0);
+  for (const size_t b : relays.breaks) {
+    const size_t from = relays.relay_frames.at(b), to = relays.relay_frames.at(b + 1);
+    bool chained = true;
+    for (size_t f = from; f <= to && chained; ++f) {
+      chained = results.at(f).localised && (f == from || !results.at(f).relocalised);
+    }
+    (chained ? linked : cut).at(b) = 1;
+  }
+  std::vector<cc::PlanarPose> relay_poses;
+  for (const size_t f : relays.relay_frames) relay_poses.push_back(results.at(f).T_mosaic_base);
+  const std::vector<size_t> kept = cc::thin_linked_relays(
+      relay_poses, linked, options_.relay.linked_step_m, options_.relay.linked_step_rad);
+
   out.map.mode = core::NavMode::kCeiling;
   out.map.camera = camera_;
   out.map.parameters_json = parameters_json;
-  for (const size_t f : relays.relay_frames) {
+  for (size_t j = 0; j < kept.size(); ++j) {
+    const size_t f = relays.relay_frames.at(kept[j]);
     const Kept& k = frames_.at(f);
     core::memory::KeyImage key;
     key.source_frame_index = static_cast<int64_t>(f);
@@ -301,25 +325,17 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
     rec.T_mosaic_base = results.at(f).T_mosaic_base;
     for (const auto& s : sightings.at(f)) rec.landmark_ids.push_back(s.id);
     out.tour.relay_images.push_back(std::move(rec));
+    // A kept pair is a break where one of the selection's pairs it spans was cut.
+    if (j + 1 < kept.size() &&
+        std::any_of(cut.begin() + static_cast<std::ptrdiff_t>(kept[j]),
+                    cut.begin() + static_cast<std::ptrdiff_t>(kept[j + 1]),
+                    [](uint8_t c) { return c != 0; })) {
+      out.tour.breaks.push_back(static_cast<int64_t>(j));
+    }
   }
   out.tour.frames = static_cast<int64_t>(frames_.size());
   out.tour.ceiling = cc::TaughtCeiling{setup_.ceiling_height_m, setup_.camera.ceiling_above_cam_m};
   out.tour.unlocalised_frames = unlocalised_;
-  // A pair of relay images that fails the paper's conditions (too few shared landmarks: the
-  // ceiling was plain or hidden between them) is still one chain where the builder posed every
-  // frame from the one to the other, by a fit or, through a loss, by the odometry prior, and
-  // none was re-localised without the odometry: the two relay poses are consistent and the
-  // replay drives between them on its own odometry where it finds no fix. Only the others, where
-  // the chain itself was cut, are breaks (docs/method/ceiling.md "The odometry as the motion
-  // prior").
-  for (const size_t b : relays.breaks) {
-    const size_t from = relays.relay_frames.at(b), to = relays.relay_frames.at(b + 1);
-    bool chained = true;
-    for (size_t f = from; f <= to && chained; ++f) {
-      chained = results.at(f).localised && (f == from || !results.at(f).relocalised);
-    }
-    if (!chained) out.tour.breaks.push_back(static_cast<int64_t>(b));
-  }
   const double first_m = frames_.front().travelled_m, last_m = frames_.back().travelled_m;
   out.tour.driven_m = std::isfinite(first_m) && std::isfinite(last_m) ? last_m - first_m : 0.0;
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "core/ceiling/relay_images.hpp"
 
@@ -129,6 +130,42 @@ TEST(RelayImages, EdgeCasesAndBadOptions) {
   EXPECT_THROW(select_relay_images({}, o), std::invalid_argument);
   o.max_orientation_change_rad = 4.0;
   EXPECT_THROW(check_relay_pair({}, {}, o), std::invalid_argument);
+}
+
+// A turn posed by the odometry alone: every frame a relay image (1 cm and 0.034 rad apart),
+// each pair linked by the chain. Thinned to about 0.2 rad per relay segment, so the replay
+// follows arcs it feeds forward; the relay images outside the run and the run's ends stay.
+TEST(RelayImages, ARunOnlyTheChainLinksIsThinnedToArcs) {
+  std::vector<PlanarPose> poses = {{0.0, 0.0, 0.0}, {0.5, 0.0, 0.0}};
+  PlanarPose p = poses.back();
+  for (int k = 0; k < 44; ++k) poses.push_back(p = p * PlanarPose{0.01, 0.0, -0.034});
+  poses.push_back(p * PlanarPose{0.5, 0.0, 0.0});
+  std::vector<uint8_t> linked(poses.size() - 1, 1);
+  linked.front() = 0;  // relay 0 -> 1: the conditions hold
+  linked.back() = 0;
+  const std::vector<size_t> kept = thin_linked_relays(poses, linked, 0.3, 0.2);
+  ASSERT_GE(kept.size(), 4u);
+  EXPECT_EQ(kept.front(), 0u);
+  EXPECT_EQ(kept[1], 1u);
+  EXPECT_EQ(kept.back(), poses.size() - 1);
+  EXPECT_EQ(kept[kept.size() - 2], poses.size() - 2);  // the run's last relay image
+  // 1.5 rad in steps of at least 0.2 rad: at most 8 segments inside the run.
+  EXPECT_LE(kept.size(), 2u + 8u + 1u);
+  for (size_t j = 2; j + 2 < kept.size(); ++j) {
+    const double turned = std::abs(wrap_angle_rad(poses[kept[j]].theta_rad -
+                                                  poses[kept[j - 1]].theta_rad));
+    EXPECT_GE(turned, 0.2 - 1e-9) << j;
+    EXPECT_LT(turned, 0.2 + 0.034) << j;
+  }
+  // Nothing linked: every relay image stays.
+  const std::vector<uint8_t> none(poses.size() - 1, 0);
+  EXPECT_EQ(thin_linked_relays(poses, none, 0.3, 0.2).size(), poses.size());
+  EXPECT_THROW(thin_linked_relays(poses, std::vector<uint8_t>(3, 1), 0.3, 0.2),
+               std::invalid_argument);
+  EXPECT_THROW(thin_linked_relays(poses, linked, -1.0, 0.2), std::invalid_argument);
+  RelayOptions o;
+  o.linked_step_rad = -0.1;
+  EXPECT_THROW(o.check(), std::invalid_argument);
 }
 
 }  // namespace

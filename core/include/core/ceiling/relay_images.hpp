@@ -21,6 +21,7 @@
 // std::invalid_argument naming the field.
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/ceiling/mosaic_builder.hpp"
@@ -30,6 +31,11 @@ namespace pepper::core::ceiling {
 struct RelayOptions {
   int min_shared_landmarks = 8;             ///< condition (1), >= 1 (the paper: 1)
   double max_orientation_change_rad = 0.3;  ///< condition (2), in (0, pi)
+  /// thin_linked_relays' spacing in runs only the chain links, >= 0: relay images there at least
+  /// this far apart or turned this much (an arc over 0.2 rad: above the replay's 0.1 rad arc
+  /// threshold, so its curvature is fed forward)
+  double linked_step_m = 0.3;
+  double linked_step_rad = 0.2;
 
   /// Throws std::invalid_argument naming the first invalid field.
   void check() const;
@@ -55,5 +61,19 @@ struct RelaySelection {
 
 RelaySelection select_relay_images(const std::vector<std::vector<LandmarkSighting>>& frames,
                                    const RelayOptions& options = {});
+
+/// Where the teach's chain links two relay images that fail the conditions (every frame between
+/// them posed, by a fit or by the odometry: mosaic_builder.hpp), the selection above has taken
+/// every frame as a relay image (none satisfied the conditions with the previous one): in a turn
+/// posed by the odometry, relay images a centimetre apart, each turning less than the replay's
+/// arc threshold, so the replay follows chords and feeds no curvature forward. Within a run of
+/// such linked pairs (`linked[i]`: relay i -> i + 1), a relay image is kept only where the pose
+/// moved at least `min_step_m` or turned at least `min_step_rad` since the last kept one; the
+/// run's ends are kept. Returns the kept indices into `relay_poses` (increasing, the first and
+/// the last included). Pure; throws std::invalid_argument when `linked` does not have one entry
+/// per pair or a step is negative.
+std::vector<size_t> thin_linked_relays(const std::vector<PlanarPose>& relay_poses,
+                                       const std::vector<uint8_t>& linked, double min_step_m,
+                                       double min_step_rad);
 
 }  // namespace pepper::core::ceiling
