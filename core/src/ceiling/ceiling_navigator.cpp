@@ -219,9 +219,7 @@ CeilingStepResult CeilingNavigator::step_observation(const CeilingObservation& o
                         state_ == nav::NavState::kDeadReckoning;
   // The odometry's possible error since the last fix grows with this frame's motion.
   if (odom && prev_odom_) {
-    const PlanarPose o0{prev_odom_->x_m, prev_odom_->y_m, prev_odom_->yaw_rad};
-    const PlanarPose o1{odom->x_m, odom->y_m, odom->yaw_rad};
-    const PlanarPose step = o0.inverse() * o1;
+    const PlanarPose step = odometry_motion(*prev_odom_, *odom);
     const double d_m = std::hypot(step.x_m, step.y_m);
     coast_heading_error_rad_ += kOdometryYawErrorPerRad * std::abs(wrap_angle_rad(step.theta_rad)) +
                                 kOdometryYawErrorPerM * d_m;
@@ -230,9 +228,7 @@ CeilingStepResult CeilingNavigator::step_observation(const CeilingObservation& o
   prev_odom_ = odom;
   std::optional<PlanarPose> predicted;
   if (tracking && last_fix_ && last_fix_odom_ && odom) {
-    const PlanarPose o0{last_fix_odom_->x_m, last_fix_odom_->y_m, last_fix_odom_->yaw_rad};
-    const PlanarPose o1{odom->x_m, odom->y_m, odom->yaw_rad};
-    const PlanarPose delta = o0.inverse() * o1;
+    const PlanarPose delta = odometry_motion(*last_fix_odom_, *odom);
     predicted = *last_fix_ * delta;
     ct.coasted_m = std::hypot(delta.x_m, delta.y_m);
   } else if (tracking) {

@@ -54,7 +54,7 @@ std::vector<HeightCheckFrame> height_check_frames(
     const MosaicFrameResult& r = results[i];
     if (r.localised) out[i].T_mosaic_base = r.T_mosaic_base;
     if (odometry[i])
-      out[i].T_odom_base = PlanarPose{odometry[i]->x_m, odometry[i]->y_m, odometry[i]->yaw_rad};
+      out[i].T_odom_base = from_odometry(*odometry[i]);
     out[i].jump = r.relocalised || r.closed_loop;
   }
   return out;

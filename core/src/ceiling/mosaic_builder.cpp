@@ -206,10 +206,9 @@ MosaicFrameResult MosaicBuilder::add_frame(const CeilingObservation& obs,
 
   // The odometry's prediction of this frame's pose: the last fitted frame's pose moved by the
   // odometry since that frame.
-  auto as_pose = [](const OdometryPose& p) { return PlanarPose{p.x_m, p.y_m, p.yaw_rad}; };
   std::optional<PlanarPose> predicted;
   if (options_.odometry_prior && odom && odom_at_good_) {
-    predicted = last_pose_ * (as_pose(*odom_at_good_).inverse() * as_pose(*odom));
+    predicted = last_pose_ * odometry_motion(*odom_at_good_, *odom);
   }
 
   // With loop closure, the landmarks not seen for loop.min_gap_m of travel ("old") are matched
@@ -362,7 +361,8 @@ void MosaicBuilder::add_new_landmarks(const CeilingObservation& obs, const Plana
   const bool create =
       std::hypot(T.x_m - creation_pose_.x_m, T.y_m - creation_pose_.y_m) >=
           options_.landmark_step_m ||
-      std::abs(wrap_angle_rad(T.theta_rad - creation_pose_.theta_rad)) >= options_.landmark_step_rad;
+      std::abs(wrap_angle_rad(T.theta_rad - creation_pose_.theta_rad)) >=
+          options_.landmark_step_rad;
   if (!create) return;
   creation_pose_ = T;
   for (size_t i = 0; i < obs.size(); ++i) {

@@ -346,9 +346,7 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
     const auto& o0 = frames_.front().odom;
     const auto& oi = frames_[i].odom;
     if (o0 && oi) {
-      const cc::PlanarPose T_odom_0{o0->x_m, o0->y_m, o0->yaw_rad};
-      const cc::PlanarPose T_odom_i{oi->x_m, oi->y_m, oi->yaw_rad};
-      const cc::PlanarPose T_0_i = T_odom_0.inverse() * T_odom_i;
+      const cc::PlanarPose T_0_i = cc::odometry_motion(*o0, *oi);
       out.tour.odometry_disagreement_m = std::hypot(T_0_i.x_m - results[i].T_mosaic_base.x_m,
                                                     T_0_i.y_m - results[i].T_mosaic_base.y_m);
     }

@@ -23,9 +23,9 @@
 //
 // Matching is guided by the previous pose (frames are consecutive video frames; with odometry,
 // by its prediction, below): a frame landmark is compared only with mosaic landmarks within
-// `search_radius_m` of where that pose puts it, best Hamming distance <= `max_hamming`, each mosaic landmark used once. A frame without
-// consensus (too few inliers) is reported as not localised and adds nothing; the next frame is
-// matched with the last good pose.
+// `search_radius_m` of where that pose puts it, best Hamming distance <= `max_hamming`, each
+// mosaic landmark used once. Without odometry, a frame without consensus (too few inliers) is
+// reported as not localised and adds nothing; the next frame is matched with the last good pose.
 //
 // Re-localisation (docs/method/ceiling.md, "Re-localising after a loss"): a frame that the guided
 // matching cannot pose (the ceiling was lost, e.g. hidden while the base moved farther than
@@ -45,8 +45,8 @@
 // nothing is compared with where the chain was before the loss (the motion while lost is
 // unknown), so what was built before the gap keeps its drift, and there is no motion gate: a fix
 // may be anywhere on the mosaic, so a ceiling that repeats an earlier part exactly would be
-// taken for it. With odometry there is no search without a prior (below). A teach that never loses the ceiling is built exactly as
-// without the feature (relocalisation.enabled = false).
+// taken for it. With odometry there is no search without a prior (below). A teach that never
+// loses the ceiling is built exactly as without the feature (relocalisation.enabled = false).
 //
 // The odometry as the motion prior (docs/method/ceiling.md, "The odometry as the motion prior"):
 // where the frames carry the robot's odometry, the guided matching starts from the last fitted

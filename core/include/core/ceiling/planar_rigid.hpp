@@ -14,6 +14,8 @@
 #include <opencv2/core/types.hpp>
 #include <vector>
 
+#include "core/odometry.hpp"
+
 namespace pepper::core::ceiling {
 
 /// A planar rigid transform T_a_b: p_a = R(theta_rad) p_b + (x_m, y_m).
@@ -30,6 +32,14 @@ struct PlanarPose {
 
 /// Angle wrapped to (-pi, pi].
 double wrap_angle_rad(double angle_rad);
+
+/// An odometry reading as the planar pose T_odom_base.
+inline PlanarPose from_odometry(const OdometryPose& p) { return {p.x_m, p.y_m, p.yaw_rad}; }
+
+/// The base's motion from reading `from` to reading `to`, in the base frame at `from`.
+inline PlanarPose odometry_motion(const OdometryPose& from, const OdometryPose& to) {
+  return from_odometry(from).inverse() * from_odometry(to);
+}
 
 /// Least-squares rigid transform T_dst_src from >= 2 corresponding points (closed form: centroids
 /// and the angle of the cross-covariance). Throws std::invalid_argument for fewer than 2 points or
