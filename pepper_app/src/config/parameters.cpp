@@ -360,15 +360,15 @@ std::vector<Parameter> build_table() {
         "fewer inliers: no essential matrix"),
     row("features.matcher.essential.planar",
         essential, &Essential::planar, "", "",
-        "planar-motion 2-point RANSAC gathers the candidates first (then general_refit); off: "
+        "planar-motion 2-point RANSAC seeds the general model (general_refit); off: "
         "five-point RANSAC on all matches (docs/perception.md \"Two-view verification\")"),
     row("features.matcher.essential.planar_threshold_factor",
         essential, &Essential::planar_threshold_factor, "", "[1, 10]",
         "planar model: its RANSAC threshold in multiples of threshold_px"),
     row("features.matcher.essential.general_refit",
         essential, &Essential::general_refit, "", "",
-        "planar model: five-point RANSAC on its candidates decides (off: a linear refinement "
-        "of the planar model only)"),
+        "planar model: seeds the general model, refined on Sampson distances and refitted by "
+        "five-point RANSAC on its candidates (off: a linear refinement of the planar model only)"),
     row("features.matcher.essential.general_refit_max_iterations",
         essential, &Essential::general_refit_max_iterations, "", "[1, 100000]",
         "planar model: five-point samples on its candidates at most"),

@@ -4,22 +4,25 @@
 // RANSAC). Models:
 //  - five-point (default, `planar = false`): the general 5-DOF model (cv::findEssentialMat,
 //    Nister's solver) on all matches.
-//  - planar then general (`planar = true`, issue 22): the camera moves on the floor with a
-//    known pitch (2 DOF), so 2-point RANSAC (planar_essential.hpp) at `planar_threshold_factor`
-//    x the threshold finds the candidates cheaply (~20 samples at 50 % outliers instead of ~150
-//    five-point ones, and it gives up after its adaptive count on views that share no scene);
-//    with `general_refit` the general five-point model is then fitted by RANSAC on those
-//    candidates only (nearly all inliers: at most `general_refit_max_iterations` samples) and
-//    classifies every match at the threshold, with the linear local optimisation. Why the
-//    general model at the end: between real Pepper key images the camera also pitches and
-//    rolls by 0.2-6 deg (the base sways); the planar model with only a linear refinement
-//    (`general_refit = false`) verified 95 % of the five-point model's points between
-//    neighbouring key images and 83 % two apart, with the refit 98-100 % and 97 %
-//    (bench_essential_real, docs/perception.md "Two-view verification"). Not the default yet:
-//    three core tests change (docs/method/navigator.md "Speed", issue 22). With
-//    `five_point_fallback` the five-point model also runs where the planar model finds no
+//  - planar, refined to the general model (`planar = true`, issue 22): the camera moves on the
+//    floor with a known pitch (2 DOF), so 2-point RANSAC (planar_essential.hpp) at
+//    `planar_threshold_factor` x the threshold finds the motion cheaply (~20 samples at 50 %
+//    outliers instead of ~150 five-point ones, and it gives up after its adaptive count on
+//    views that share no scene). The base sways (between real Pepper key images the camera also
+//    pitches and rolls by 0.2-6 deg), so with `general_refit` the planar model only seeds the
+//    general 5-DOF model, two hypotheses of it: the planar model itself, refined on the Sampson
+//    distances of the matches within a threshold shrinking to the verification one
+//    (Levenberg-Marquardt over the rotation and the direction of t); and the five-point model
+//    fitted by RANSAC on the planar model's candidates (at most `general_refit_max_iterations`
+//    samples, nearly all inliers), refined the same way. The one with the lower MSAC cost at
+//    the verification threshold decides. Each alone falls short: the refinement can settle in
+//    the basin of a wrong yaw that the wide threshold admitted, and 25 five-point samples miss
+//    the precise model (on the closed loop's own calls the five-point refit alone verified
+//    0.1-1.6 % fewer matches than the five-point model, and half as many on some calls).
+//    Without `general_refit` the planar model gets a linear 8-point refinement only.
+//    With `five_point_fallback` the five-point model also runs where the planar model finds no
 //    support (off: on views that share no scene it only adds time and the 5-DOF model's chance
-//    fits).
+//    fits). docs/perception.md "Two-view verification" has the measurements.
 //
 // Inputs: matched points in normalised coordinates of view a and view b (same length); the
 // threshold is given in pixels and converted with `focal_px` (threshold_norm = threshold_px /
@@ -43,11 +46,11 @@ struct EssentialRansacOptions {
   double confidence = 0.999;   ///< RANSAC confidence, (0, 1)
   int max_iterations = 1000;   ///< RANSAC cap (five-point samples; planar: 2-point samples)
   int min_inliers = 8;         ///< below this, the result is "not found" (5..)
-  bool planar = false;         ///< planar 2-point candidates first (then general); false: five-point only
+  bool planar = false;         ///< planar 2-point model seeds the general one (false: five-point)
   double camera_pitch_rad = 0.0;  ///< planar model: camera pitch (> 0 looks down)
   double planar_threshold_factor = 5.0;  ///< planar model's threshold: this x threshold_px (the
                                          ///< base sways; a general refinement follows)
-  /// planar model: the general five-point model refitted on its candidates (false: a linear
+  /// planar model: seeds the general model, refined and five-point refitted (false: a linear
   /// refinement only; header comment)
   bool general_refit = true;
   int general_refit_max_iterations = 25;  ///< five-point samples on the planar candidates
