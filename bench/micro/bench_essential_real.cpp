@@ -3,14 +3,15 @@
 // FeatureExtractor), 1 and 2 key images apart, and Edge_01 image i against the opposite route's
 // Edge_10 image 12 - (12 * i) / 21 (the clutter frames of bench_navigator_real), with
 //   five_point/cap       the five-point model alone (features.matcher.essential.planar false,
-//                        the default before issue 22) with max_iterations = cap (1000: the cap
+//                        the default until session 31) with max_iterations = cap (1000: the cap
 //                        OpenCV 4.6 used whatever was asked);
 //   planar/factor        the planar 2-point model with only the linear refinement
 //                        (general_refit false), camera pitch 0.18 rad (this data's, see
 //                        bench_navigator_real.cpp), planar_threshold_factor = factor;
-//   planar_general/...   planar candidates at factor x the threshold, camera pitch
-//                        pitch_crad / 100 rad, then the five-point refit with at most refit_cap
-//                        samples (general_refit_max_iterations).
+//   planar_general/...   the default path: the planar model at factor x the threshold, camera
+//                        pitch pitch_crad / 100 rad, seeding the refined general model (the
+//                        five-point refit on its candidates with at most refit_cap samples,
+//                        general_refit_max_iterations, is one of its two hypotheses).
 //   fast                 the app's `fast` preset: planar_general/5/0/25 with a 9 px KLT window.
 // The KLT options are the defaults (window_px 15) except in `fast`.
 // One iteration matches all pairs once. Counters: verified points and lines summed over the
@@ -137,10 +138,10 @@ void BM_Planar(benchmark::State& state) {
 }
 BENCHMARK(BM_Planar)->ArgName("factor")->Arg(1)->Arg(3)->Arg(5)->Unit(benchmark::kMillisecond)->Iterations(1);
 
-// Planar candidates, general five-point refit (essential_ransac.hpp; the `fast` preset's model).
+// The planar model seeding the refined general model (essential_ransac.hpp; the default).
 void BM_PlanarGeneral(benchmark::State& state) {
   core::features::MatcherOptions mo;
-  mo.essential.planar = true;  // general_refit is on by default
+  mo.essential.planar = true;  // the default, as general_refit
   mo.essential.planar_threshold_factor = static_cast<double>(state.range(0));
   mo.essential.camera_pitch_rad = static_cast<double>(state.range(1)) / 100.0;
   mo.essential.general_refit_max_iterations = static_cast<int>(state.range(2));

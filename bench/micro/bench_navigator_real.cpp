@@ -34,13 +34,14 @@
 //   BM_RealNavigatorStepVga    the same grey frames upscaled to 640x480 (cv::resize, bilinear),
 //                              the map built from the upscaled images with pepper_top_vga()
 //                              (= the QVGA intrinsics scaled_to(640, 480)).
-//   BM_RealNavigatorStep{Qvga,Vga}Planar  the same with the planar 2-point essential model
-//                              (features.matcher.essential.planar, camera pitch 0.18 rad).
+//   BM_RealNavigatorStep{Qvga,Vga}Planar  the defaults (the planar 2-point essential model
+//                              seeding the general one) at this data's camera pitch, 0.18 rad
+//                              instead of the default 0.
+//   BM_RealNavigatorStep{Qvga,Vga}FivePoint  the general five-point essential RANSAC alone
+//                              (features.matcher.essential.planar false; the default until
+//                              session 31).
 //   BM_RealNavigatorStep{Qvga,Vga}Fast    the same with the options of the app's `fast` preset
-//                              (planar model at pitch 0, KLT window 9 px; issue 22).
-//   BM_RealNavigatorStep{Qvga,Vga}Cap300  the defaults with the five-point RANSAC capped at
-//                              300 samples (features.matcher.essential.max_iterations; 1000
-//                              by default).
+//                              (the defaults and a 9 px KLT window; issue 22).
 //   BM_RealNavigatorStep{Qvga,Vga}TwoThreads  the defaults with OpenCV on 2 threads
 //                              (cv::setNumThreads(2) for the benchmark; IN and INN matched as two
 //                              concurrent tasks, FrameMatcher::compute_two_views): run it on two
@@ -363,12 +364,11 @@ BENCHMARK(BM_RealNavigatorStepVgaTwoThreads)
     ->Iterations(kIterations)
     ->UseRealTime();
 
-// The planar-motion 2-point essential model (features.matcher.essential.planar; since issue 22
-// its candidates are refitted with the general five-point model, general_refit) with this
-// data's camera pitch: 0.18 rad (looking down: the five-point translations between
-// neighbouring Edge_01 key images point ~0.18 rad above the optical axis, and the corridor's
-// vanishing point sits ~55 px above the image centre at QVGA; a scan of the pitch verified the
-// most points there).
+// The planar-motion 2-point essential model (features.matcher.essential.planar, the default;
+// it seeds the refined general model, general_refit) with this data's camera pitch: 0.18 rad
+// (looking down: the five-point translations between neighbouring Edge_01 key images point
+// ~0.18 rad above the optical axis, and the corridor's vanishing point sits ~55 px above the
+// image centre at QVGA; a scan of the pitch verified the most points there).
 core::navigator::NavigatorOptions planar_options() {
   core::navigator::NavigatorOptions o;
   o.matcher.essential.planar = true;
@@ -384,12 +384,10 @@ void BM_RealNavigatorStepVgaPlanar(benchmark::State& state) {
 }
 BENCHMARK(BM_RealNavigatorStepVgaPlanar)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
 
-// The `fast` preset of the app (pepper_app/src/config/parameters.cpp): the planar model with
-// the general refit at the default pitch 0 (the product's level head; on this data pitch 0
-// verified as many points as 0.18 with the refit: bench_essential_real) and a 9 px KLT window.
+// The `fast` preset of the app (pepper_app/src/config/parameters.cpp): the defaults (the planar
+// model at the default pitch 0, the product's level head) and a 9 px KLT window.
 core::navigator::NavigatorOptions fast_options() {
   core::navigator::NavigatorOptions o;
-  o.matcher.essential.planar = true;
   o.extractor.klt.window_px = 9;  // the current frame's pyramid, as the app sets both
   o.extractor.klt.prior_window_px = 9;
   o.matcher.klt = o.extractor.klt;
@@ -404,23 +402,26 @@ void BM_RealNavigatorStepVgaFast(benchmark::State& state) {
 }
 BENCHMARK(BM_RealNavigatorStepVgaFast)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
 
-// The defaults with the five-point RANSAC capped at 300 samples instead of 1000
-// (features.matcher.essential.max_iterations; issue 22, docs/perception.md "Speed, session 25
-// (issue 22)"): calls where little is shared run to the cap, and each five-point sample costs
-// ~0.2 M instructions, nearly all in OpenCV's minimal solver.
-core::navigator::NavigatorOptions cap300_options() {
+// The general five-point essential RANSAC alone (features.matcher.essential.planar false), the
+// default until session 31: on frames that share little with a key image it runs to its cap of
+// 1000 samples (docs/method/navigator.md "Speed").
+core::navigator::NavigatorOptions five_point_options() {
   core::navigator::NavigatorOptions o;
-  o.matcher.essential.max_iterations = 300;
+  o.matcher.essential.planar = false;
   return o;
 }
-void BM_RealNavigatorStepQvgaCap300(benchmark::State& state) {
-  step_sequence(state, qvga_sequence(), cap300_options());
+void BM_RealNavigatorStepQvgaFivePoint(benchmark::State& state) {
+  step_sequence(state, qvga_sequence(), five_point_options());
 }
-BENCHMARK(BM_RealNavigatorStepQvgaCap300)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
-void BM_RealNavigatorStepVgaCap300(benchmark::State& state) {
-  step_sequence(state, vga_sequence(), cap300_options());
+BENCHMARK(BM_RealNavigatorStepQvgaFivePoint)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(kIterations);
+void BM_RealNavigatorStepVgaFivePoint(benchmark::State& state) {
+  step_sequence(state, vga_sequence(), five_point_options());
 }
-BENCHMARK(BM_RealNavigatorStepVgaCap300)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+BENCHMARK(BM_RealNavigatorStepVgaFivePoint)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(kIterations);
 
 }  // namespace
 

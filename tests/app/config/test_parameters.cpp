@@ -247,13 +247,14 @@ TEST(ConfigParameters, PresetsApply) {
   EXPECT_NE(config_error({"", "turbo", {}})
                 .find("--preset turbo: unknown preset (known: default, paper, fast)"),
             std::string::npos);
-  // fast (issue 22): the planar essential model and a 9 px KLT window, for extraction and
-  // tracking alike.
+  // fast (issue 22): a 9 px KLT window, for extraction and tracking alike; the planar
+  // essential model is the default since session 31.
   const auto fast = load_app_config(ConfigSources{"", "fast", {}}).navigator_options();
   EXPECT_TRUE(fast.matcher.essential.planar);
   EXPECT_EQ(fast.extractor.klt.window_px, 9);
   EXPECT_EQ(fast.matcher.klt.window_px, 9);
-  EXPECT_FALSE(AppConfig{}.navigator_options().matcher.essential.planar);
+  EXPECT_TRUE(AppConfig{}.navigator_options().matcher.essential.planar);
+  EXPECT_EQ(AppConfig{}.navigator_options().matcher.klt.window_px, 15);
   for (const Preset& p : presets()) {
     EXPECT_NO_THROW(load_app_config(ConfigSources{"", p.name, {}})) << p.name;
   }

@@ -34,7 +34,14 @@ TEST(FloorLinesReplay, TheOdometryEstimateLearnsTheLateralOffsetFromTheFloorEdge
   ASSERT_GE(teach.map.key_images.size(), 4u);
   ASSERT_TRUE(teach.map.key_images.front().odom);  // the mock's wheel odometry, in the map
 
-  core::navigator::Navigator nav(teach.map, replay_session_options(o).navigator);
+  // The floor lines correct the estimate only on frames without an accepted VNHV fix. With the
+  // default planar essential model VNHV fixes 0.20-0.22 m on about 40 of these frames and the
+  // floor lines act on 37 (within 3 cm after the first second); with the five-point model VNHV
+  // has no fix here and the floor lines alone must learn the offset, which is what this test is
+  // about.
+  core::navigator::NavigatorOptions nav_options = replay_session_options(o).navigator;
+  nav_options.matcher.essential.planar = false;
+  core::navigator::Navigator nav(teach.map, nav_options);
   sim::LightingCondition light = world->light("replay");
   light.ambient *= 1.4;
   light.windows *= 1.4;
@@ -71,7 +78,7 @@ TEST(FloorLinesReplay, TheOdometryEstimateLearnsTheLateralOffsetFromTheFloorEdge
   }
   std::printf("[ measured ] %d of 100 frames with a floor-line update, %d after the first second\n",
               floor_frames, late_frames);
-  EXPECT_GE(floor_frames, 40);  // measured 83 (QVGA)
+  EXPECT_GE(floor_frames, 40);  // measured 77 (QVGA; 83 before the teach used the planar model)
   ASSERT_GT(late_frames, 0);
   EXPECT_EQ(late_good, late_frames);
 }

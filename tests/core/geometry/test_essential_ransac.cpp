@@ -17,6 +17,13 @@ using test::PlanarPose;
 
 class EssentialSynthetic : public ::testing::TestWithParam<double> {};
 
+// The general five-point model alone (the default until session 31).
+EssentialRansacOptions five_point() {
+  EssentialRansacOptions o;
+  o.planar = false;
+  return o;
+}
+
 // The navigator-like pair of views (8 cm sideways, 10 cm ahead, 0.5 rad) with noisy points.
 auto noisy_scene_points(const CameraIntrinsics& k, double outliers, uint64_t seed) {
   test::SceneOptions so;
@@ -31,7 +38,7 @@ TEST_P(EssentialSynthetic, RecoversInliersRejectsOutliers) {
   const CameraIntrinsics k = CameraIntrinsics::pepper_top_vga();
   for (uint64_t seed = 1; seed <= 8; ++seed) {
     const auto d = noisy_scene_points(k, outliers, seed);
-    const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px);
+    const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px, five_point());
     ASSERT_TRUE(r.found);
     const auto s = test::score(r.inliers, d.is_inlier);
     // Issue requirement: >= 95 % of true inliers, <= 2 % outliers (measured: >= 97.6 %, <= 1.1 %).
@@ -68,7 +75,7 @@ TEST_P(EssentialSynthetic, RankedInputMeetsTheSameTargets) {
       b.push_back(d.b_norm[static_cast<size_t>(i)]);
       is_inlier.push_back(d.is_inlier[static_cast<size_t>(i)]);
     }
-    const auto r = verify_essential(a, b, k.fx_px, {}, true);
+    const auto r = verify_essential(a, b, k.fx_px, five_point(), true);
     ASSERT_TRUE(r.found);
     const auto s = test::score(r.inliers, is_inlier);
     EXPECT_GE(s.recall, 0.95) << "seed " << seed;
@@ -116,22 +123,30 @@ TEST(Essential, RankedWithoutBaselineFallsBackToRansac) {
   so.pixel_noise_px = 0.0;
   test::SyntheticScene scene(k, so, 3);
   const auto d = scene.points(PlanarPose{0.0, 0.0, 0.0}, PlanarPose{0.08, 0.1, 0.5});
-  const auto plain = verify_essential(d.a_norm, d.a_norm, k.fx_px);
-  const auto ranked = verify_essential(d.a_norm, d.a_norm, k.fx_px, {}, true);
+  const auto plain = verify_essential(d.a_norm, d.a_norm, k.fx_px, five_point());
+  const auto ranked = verify_essential(d.a_norm, d.a_norm, k.fx_px, five_point(), true);
   EXPECT_EQ(ranked.found, plain.found);
   EXPECT_EQ(ranked.inliers, plain.inliers);
 }
 
 TEST(Essential, FewPointsIsNotFound) {
   std::vector<cv::Point2d> a(4, {0.1, 0.2}), b(4, {0.1, 0.2});
-  EXPECT_FALSE(verify_essential(a, b, 500.0).found);
-  EXPECT_FALSE(verify_essential({}, {}, 500.0).found);
+  for (const bool planar : {false, true}) {
+    EssentialRansacOptions o;
+    o.planar = planar;
+    EXPECT_FALSE(verify_essential(a, b, 500.0, o).found) << planar;
+    EXPECT_FALSE(verify_essential({}, {}, 500.0, o).found) << planar;
+  }
 }
 
 TEST(Essential, DegenerateIdenticalPointsDoNotCrash) {
   std::vector<cv::Point2d> a(50, {0.1, 0.2}), b(50, {0.1, 0.2});
-  const auto r = verify_essential(a, b, 500.0);
-  EXPECT_TRUE(r.inliers.empty() || r.found);
+  for (const bool planar : {false, true}) {
+    EssentialRansacOptions o;
+    o.planar = planar;
+    const auto r = verify_essential(a, b, 500.0, o);
+    EXPECT_TRUE(r.inliers.empty() || r.found) << planar;
+  }
 }
 
 TEST(Essential, RelativePoseByCheiralityHasTheTrueRotationAndSignedTranslation) {
@@ -142,18 +157,22 @@ TEST(Essential, RelativePoseByCheiralityHasTheTrueRotationAndSignedTranslation) 
   so.pixel_noise_px = 0.3;
   test::SyntheticScene scene(k, so, 5);
   const auto d = scene.points(key, cur);
-  const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px);
-  ASSERT_TRUE(r.found);
-  const RelativePose pose = recover_relative_pose(r.E_b_a, d.a_norm, d.b_norm);
-  // X_cur = R X_key + t with R = R_y(yaw_cur - yaw_key), t along R_y(yaw_cur) (C_key - C_cur).
-  const cv::Matx33d R_true = test::rot_y(cur.yaw_rad - key.yaw_rad);
-  const cv::Vec3d t_true = cv::normalize(
-      test::rot_y(cur.yaw_rad) * cv::Vec3d(key.cx_m - cur.cx_m, 0.0, key.cz_m - cur.cz_m));
-  EXPECT_LT(cv::norm(pose.R_b_a - R_true), 0.01);
-  EXPECT_GT(pose.t_b_a.dot(t_true), 0.99);
-  EXPECT_EQ(pose.in_front, static_cast<int>(d.a_norm.size()));
-  EXPECT_LT(pose.in_front_runner_up, pose.in_front / 2);
-  EXPECT_THROW(recover_relative_pose(r.E_b_a, d.a_norm, {}), std::invalid_argument);
+  for (const bool planar : {false, true}) {
+    EssentialRansacOptions o;
+    o.planar = planar;
+    const auto r = verify_essential(d.a_norm, d.b_norm, k.fx_px, o);
+    ASSERT_TRUE(r.found);
+    const RelativePose pose = recover_relative_pose(r.E_b_a, d.a_norm, d.b_norm);
+    // X_cur = R X_key + t with R = R_y(yaw_cur - yaw_key), t along R_y(yaw_cur) (C_key - C_cur).
+    const cv::Matx33d R_true = test::rot_y(cur.yaw_rad - key.yaw_rad);
+    const cv::Vec3d t_true = cv::normalize(
+        test::rot_y(cur.yaw_rad) * cv::Vec3d(key.cx_m - cur.cx_m, 0.0, key.cz_m - cur.cz_m));
+    EXPECT_LT(cv::norm(pose.R_b_a - R_true), 0.01);
+    EXPECT_GT(pose.t_b_a.dot(t_true), 0.99);
+    EXPECT_EQ(pose.in_front, static_cast<int>(d.a_norm.size()));
+    EXPECT_LT(pose.in_front_runner_up, pose.in_front / 2);
+    EXPECT_THROW(recover_relative_pose(r.E_b_a, d.a_norm, {}), std::invalid_argument);
+  }
 }
 
 TEST(Essential, MismatchedSizesThrow) {

@@ -204,8 +204,8 @@ TEST(PlanarEssential, BrokenContractsThrow) {
   EXPECT_THROW(estimate_planar_essential(a, a, 500.0, o), std::invalid_argument);
 }
 
-// verify_essential's planar model against its five-point model (the default) on the synthetic
-// planar scenes of test_essential_ransac.cpp: the same recall over all runs (within 0.5 %),
+// verify_essential's planar model against its five-point model on the synthetic planar scenes
+// of test_essential_ransac.cpp: at least the same recall over all runs (within 0.1 %),
 // contamination within the 1 % over all runs (measured with the default caps: recall
 // planar 99.75 %, five-point 99.72 %; outliers planar 0.25 %, five-point 0.19 %; before the
 // planar model seeded the refined general one, planar 99.2 % and 0.31 %; with a five-point cap
@@ -223,6 +223,7 @@ TEST(PlanarEssential, VerifyEssentialPlanarMatchesFivePoint) {
       const auto d = scene.points(test::PlanarPose{0.0, 0.0, 0.0}, test::PlanarPose{0.08, 0.1, 0.5});
       EssentialRansacOptions planar, five;
       planar.planar = true;
+      five.planar = false;
       const auto rp = verify_essential(d.a_norm, d.b_norm, k.fx_px, planar, true);
       const auto rf = verify_essential(d.a_norm, d.b_norm, k.fx_px, five, true);
       ASSERT_TRUE(rp.found);
@@ -237,7 +238,7 @@ TEST(PlanarEssential, VerifyEssentialPlanarMatchesFivePoint) {
       ++runs;
     }
   }
-  EXPECT_GE(recall_planar / runs, recall_five / runs - 0.005);
+  EXPECT_GE(recall_planar / runs, recall_five / runs - 0.001);
   EXPECT_LE(cont_planar / runs, 0.01);
   std::cout << "mean recall planar " << recall_planar / runs << " five-point " << recall_five / runs
             << "; mean contamination planar " << cont_planar / runs << " five-point "

@@ -2,10 +2,10 @@
 // Two-view point verification: essential-matrix RANSAC on normalised image coordinates
 // (METHOD.md "Features and verification": a point match counts only if it passes essential
 // RANSAC). Models:
-//  - five-point (default, `planar = false`): the general 5-DOF model (cv::findEssentialMat,
-//    Nister's solver) on all matches.
-//  - planar, refined to the general model (`planar = true`, issue 22): the camera moves on the
-//    floor with a known pitch (2 DOF), so 2-point RANSAC (planar_essential.hpp) at
+//  - five-point (`planar = false`, the default until session 31): the general 5-DOF model
+//    (cv::findEssentialMat, Nister's solver) on all matches.
+//  - planar, refined to the general model (`planar = true`, the default; issue 22): the camera
+//    moves on the floor with a known pitch (2 DOF), so 2-point RANSAC (planar_essential.hpp) at
 //    `planar_threshold_factor` x the threshold finds the motion cheaply (~20 samples at 50 %
 //    outliers instead of ~150 five-point ones, and it gives up after its adaptive count on
 //    views that share no scene). The base sways (between real Pepper key images the camera also
@@ -46,7 +46,7 @@ struct EssentialRansacOptions {
   double confidence = 0.999;   ///< RANSAC confidence, (0, 1)
   int max_iterations = 1000;   ///< RANSAC cap (five-point samples; planar: 2-point samples)
   int min_inliers = 8;         ///< below this, the result is "not found" (5..)
-  bool planar = false;         ///< planar 2-point model seeds the general one (false: five-point)
+  bool planar = true;          ///< planar 2-point model seeds the general one (false: five-point)
   double camera_pitch_rad = 0.0;  ///< planar model: camera pitch (> 0 looks down)
   double planar_threshold_factor = 5.0;  ///< planar model's threshold: this x threshold_px (the
                                          ///< base sways; a general refinement follows)
