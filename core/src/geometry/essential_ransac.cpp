@@ -88,6 +88,23 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return S;
 }
 
+// E = [t]x R up to sign: its two rotations U W V^T and U W^T V^T and the direction t = u3 (U and
+// V with det > 0).
+struct EssentialFactors {
+  Eigen::Matrix3d R[2];
+  Eigen::Vector3d t;
+};
+
+EssentialFactors factor_essential(const Eigen::Matrix3d& E) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+  if (U.determinant() < 0) U = -U;
+  if (V.determinant() < 0) V = -V;
+  Eigen::Matrix3d W;
+  W << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  return {{U * W * V.transpose(), U * W.transpose() * V.transpose()}, U.col(2)};
+}
+
 // The general (5-DOF) model nearest E by the Sampson distances of the correspondences `idx`:
 // E = [t]x R with R updated by a rotation vector and t moved on the unit sphere (2 DOF),
 // Levenberg-Marquardt with forward-difference Jacobians. Any of E's four (R, t) decompositions
@@ -97,14 +114,9 @@ bool refine_sampson(const std::vector<cv::Point2d>& a, const std::vector<cv::Poi
                     const std::vector<int>& idx, Eigen::Matrix3d& E) {
   constexpr int kIterations = 10;
   if (idx.size() < 6) return false;
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
-  if (U.determinant() < 0) U = -U;
-  if (V.determinant() < 0) V = -V;
-  Eigen::Matrix3d W;
-  W << 0, -1, 0, 1, 0, 0, 0, 0, 1;
-  Eigen::Matrix3d R = U * W * V.transpose();
-  Eigen::Vector3d t = U.col(2);
+  const EssentialFactors f = factor_essential(E);
+  Eigen::Matrix3d R = f.R[0];
+  Eigen::Vector3d t = f.t;
   using Vec5 = Eigen::Matrix<double, 5, 1>;
   const auto moved = [&](const Vec5& d, Eigen::Matrix3d& R_new, Eigen::Vector3d& t_new) {
     const Eigen::Vector3d w = d.head<3>();
@@ -212,14 +224,9 @@ struct Decomposition {
 // cameras.
 Decomposition best_decomposition(const Eigen::Matrix3d& E, const std::vector<cv::Point2d>& a,
                                  const std::vector<cv::Point2d>& b, const std::vector<int>& idx) {
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
-  if (U.determinant() < 0) U = -U;
-  if (V.determinant() < 0) V = -V;
-  Eigen::Matrix3d W;
-  W << 0, -1, 0, 1, 0, 0, 0, 0, 1;
-  const Eigen::Matrix3d Rs[2] = {U * W * V.transpose(), U * W.transpose() * V.transpose()};
-  const Eigen::Vector3d u3 = U.col(2);
+  const EssentialFactors f = factor_essential(E);
+  const Eigen::Matrix3d (&Rs)[2] = f.R;
+  const Eigen::Vector3d u3 = f.t;
   Decomposition best;
   best.R = Rs[0];
   best.t = u3;
