@@ -383,7 +383,8 @@ EssentialResult verify_essential(const std::vector<cv::Point2d>& a_norm,
       //    the verification threshold.
       // The refinement from the planar model can settle in another basin than the true motion
       // (a wide threshold's candidates admit a wrong yaw); the five-point samples can miss the
-      // precise model on a few noisy points. The one that verifies more matches decides.
+      // precise model on a few noisy points. The lower MSAC cost at the verification threshold
+      // decides (RANSAC's own criterion).
       const Eigen::Matrix3d Ep =
           Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(pr.E_b_a.val);
       Em = Ep;
