@@ -791,6 +791,13 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
     if (const auto d = tracker_.deviation()) {
       odom_progress = d->progress;
       past_next_m = d->s_m - tracker_.length_to_m(seg.next);
+      // The progress ends at the final key image; past it, the estimate's coordinate along the
+      // final taught pose says how far (else an image whose scale never says "reached" drives
+      // on: robotics_room furniture run 1, VGA, went 0.35 m past the end with the estimate
+      // 0.34 m past it and sigma 0.10 m, the final view's ratio 0.88-0.93 from moved furniture).
+      if (!seg.next_next && seg.next == tracker_.key_count() - 1) {
+        past_next_m = between(tracker_.taught(seg.next), *tracker_.estimate()).x_m;
+      }
       tel.odom_past_next_m = past_next_m;
       tel.odom_along_sigma_m = along_sigma_m();
     }
@@ -857,8 +864,11 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
     // cannot say (dead reckoning, or no scale ratio: too few points), as "passed IN by odometry"
     // is for a switch. Measured (gen_building_12, QVGA, both runs): the final view kept 3-5 lines
     // and no point, and the robot drove 0.35-0.39 m past the end before dead reckoning stopped it.
+    // Where the image still says "not yet", the estimate past the final pose by kPassedSigmas x
+    // its sigma along the robot is arrival: the switches' "passed IN by odometry" (above).
     const bool odometry_there =
-        (state_ == NavState::kDeadReckoning || std::isnan(ratio)) && odom_passed_next;
+        ((state_ == NavState::kDeadReckoning || std::isnan(ratio)) && odom_passed_next) ||
+        (odom_passed_next && past_next_m >= kPassedSigmas * along_sigma_m());  // NaN: false
     ev.reached_final =
         ratio >= options_.arrival_scale_ratio || faded || odometry_there;  // NaN: false
   }

@@ -169,6 +169,26 @@ TEST(DeadReckoning, StopsAndSaysSoWhenVisionNeverComesBack) {
   EXPECT_GT(blind_frames, 3);
 }
 
+TEST(DeadReckoning, TheEstimatePastTheFinalPoseEndsTheTourWhereTheImageNeverSaysReached) {
+  // The final view's scale ratio never reaches the arrival threshold (as where furniture seen
+  // in it moved away): the odometry estimate, once past the final taught pose by 2 sigma along
+  // the robot, ends the tour, a little past the end rather than driving on.
+  NavigatorOptions o;
+  o.arrival_scale_ratio = 1.9;
+  const ClosedLoopRun run = closed_loop(o, [](double) { return false; }, 400);
+  const StepResult& last = run.steps.back();
+  ASSERT_TRUE(last.command.stop);
+  EXPECT_EQ(last.command.reason, StopReason::kTourComplete);
+  const memory::KeyImage& final_key = tour().map.key_images.back();
+  const sim::Pose2D& end = tour().path.at(static_cast<size_t>(final_key.source_frame_index));
+  const sim::Pose2D& at = run.truth.back();
+  const double past_m = std::cos(end.yaw_rad) * (at.x_m - end.x_m) +
+                        std::sin(end.yaw_rad) * (at.y_m - end.y_m);
+  EXPECT_GT(past_m, 0.0);
+  EXPECT_LT(past_m, 0.3);
+  EXPECT_GE(last.telemetry.odom_past_next_m, 2.0 * last.telemetry.odom_along_sigma_m);
+}
+
 TEST(DeadReckoning, WithoutOdometryTheHoldRulesStay) {
   // Frames without odometry: no dead reckoning, the hold then the loss (NavState::kHolding).
   Navigator nav(map_with_odometry(), NavigatorOptions{});
