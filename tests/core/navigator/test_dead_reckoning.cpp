@@ -170,9 +170,9 @@ TEST(DeadReckoning, StopsAndSaysSoWhenVisionNeverComesBack) {
 }
 
 TEST(DeadReckoning, TheEstimatePastTheFinalPoseEndsTheTourWhereTheImageNeverSaysReached) {
-  // The final view's scale ratio never reaches the arrival threshold (as where furniture seen
-  // in it moved away): the odometry estimate, once past the final taught pose by 2 sigma along
-  // the robot, ends the tour, a little past the end rather than driving on.
+  // The final view's scale ratio never reaches the arrival threshold (as where the few points
+  // of a final view scatter): the odometry estimate at the final taught pose ends the tour
+  // (one 5 Hz step at most past it) rather than driving on.
   NavigatorOptions o;
   o.arrival_scale_ratio = 1.9;
   const ClosedLoopRun run = closed_loop(o, [](double) { return false; }, 400);
@@ -185,8 +185,8 @@ TEST(DeadReckoning, TheEstimatePastTheFinalPoseEndsTheTourWhereTheImageNeverSays
   const double past_m = std::cos(end.yaw_rad) * (at.x_m - end.x_m) +
                         std::sin(end.yaw_rad) * (at.y_m - end.y_m);
   EXPECT_GT(past_m, 0.0);
-  EXPECT_LT(past_m, 0.3);
-  EXPECT_GE(last.telemetry.odom_past_next_m, 2.0 * last.telemetry.odom_along_sigma_m);
+  EXPECT_LT(past_m, 0.1);
+  EXPECT_GE(last.telemetry.odom_past_next_m, 0.0);
 }
 
 TEST(DeadReckoning, WithoutOdometryTheHoldRulesStay) {
