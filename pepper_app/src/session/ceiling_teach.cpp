@@ -292,6 +292,11 @@ CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
   // others, where the chain itself was cut, are breaks (docs/method/ceiling.md "The odometry as
   // the motion prior"). Runs of linked pairs are thinned to relay images spaced for arcs.
   const size_t n_relays = relays.relay_frames.size();
+  if (n_relays < 2) {  // the selection keeps the first and the last of >= 2 frames
+    throw std::runtime_error("ceiling teach: " + std::to_string(n_relays) +
+                             " relay image(s) selected from " + std::to_string(frames_.size()) +
+                             " frames, at least 2 needed");
+  }
   std::vector<uint8_t> cut(n_relays - 1, 0), linked(n_relays - 1, 0);
   for (const size_t b : relays.breaks) {
     const size_t from = relays.relay_frames.at(b), to = relays.relay_frames.at(b + 1);
