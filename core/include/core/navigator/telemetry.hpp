@@ -115,8 +115,9 @@ struct Telemetry {
   /// gated against) and its sigmas across and in heading; NaN without an odometry estimate.
   double odom_lateral_m = kNaN, odom_heading_rad = kNaN;
   double odom_lateral_sigma_m = kNaN, odom_heading_sigma_rad = kNaN;
-  /// The odometry estimate's distance along the taught path past IN (m, < 0 before it) and its
-  /// sigma along the robot; NaN without an odometry estimate.
+  /// The odometry estimate's distance along the taught path past IN (m, < 0 before it; when IN
+  /// is the final key image, along its taught heading, so also > 0 past the end) and its sigma
+  /// along the robot; NaN without an odometry estimate.
   double odom_past_next_m = kNaN, odom_along_sigma_m = kNaN;
   double omega_demand_rad_s = kNaN;  ///< law output before schedule limits
   bool turning = false;
