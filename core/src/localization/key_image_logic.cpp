@@ -119,6 +119,9 @@ bool scale_guard_blocks(const SwitchCounts& c, const SwitcherOptions& o) {
   return std::isnan(c.next_scale_ratio) ? !c.blind_switch_allowed
                                         : !(c.next_scale_ratio >= o.min_next_scale_ratio);
 }
+bool before_by_odometry(const SwitchCounts& c, const SwitcherOptions&) {
+  return c.before_by_odometry;
+}
 bool passed_by_distance(const SwitchCounts& c, const SwitcherOptions&) {
   return c.passed_by_distance;
 }
@@ -127,7 +130,7 @@ bool passed_by_odometry(const SwitchCounts& c, const SwitcherOptions&) {
 }
 
 // clang-format off
-const std::array<SwitchRule, 5> kSwitchRules{{
+const std::array<SwitchRule, 6> kSwitchRules{{
   {"three views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kThreeView),
    three_view_rule, "nL + nP (Ia, IN, INN) > nL + nP (IP, Ia, IN) (METHOD.md)"},
   {"two views", Kind::kPaper, "", static_cast<int>(SwitchCriterion::kTwoView), two_view_rule,
@@ -137,6 +140,12 @@ const std::array<SwitchRule, 5> kSwitchRules{{
    kCriterionGuardBlocked, scale_guard_blocks,
    "the paper's rules fire too early on short segments: wait until IN's points appear at "
    "nearly their taught size (unknown size: until the commands drove part of the segment)"},
+  {"IN ahead by travel (odometry)", Kind::kGuard,
+   "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
+   kCriterionGuardBlocked, before_by_odometry,
+   "the paper's rules fire early where consecutive key images look alike (a turn taught with "
+   "key images a few centimetres apart): wait while the robot's odometry, carried along the "
+   "taught path, is 2 sigmas of the estimate along the robot before IN"},
   {"passed IN by travel (odometry)", Kind::kAddition,
    "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
    kCriterionPassedByOdometry, passed_by_odometry,

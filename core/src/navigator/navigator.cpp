@@ -816,6 +816,12 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
   counts.passed_by_odometry =
       odom_passed_next && (std::isnan(counts.next_scale_ratio) ||
                            past_next_m >= kPassedSigmas * along_sigma_m());
+  // The counterpart: the estimate still kPassedSigmas x its sigma before IN blocks the paper's
+  // count rules. Measured (gen_room_7, QVGA, run 1): in a turn taught with key images 2-4 cm
+  // apart the count rules switched 9 and 25 cm before IN (the scale ratio 0.93-0.95, above
+  // the guard), and the robot turned early: 5.1 / 15.5 cm lateral RMS / max -> 3.2 / 7.5 cm.
+  counts.before_by_odometry =
+      has_odometry && past_next_m <= -kPassedSigmas * along_sigma_m();  // NaN: false
   if (!has_odometry && seg.next_next && segment_from_switch_ &&
       std::isnan(counts.next_scale_ratio)) {
     counts.passed_by_distance = segment_driven_m_ >= kPassedByCommandsFactor * segment_taught_m();
@@ -830,8 +836,9 @@ Navigator::SegmentEvidence Navigator::associate(features::FrameMatcher& fm, Tele
     // the scale guard blocks, the paper's rules do not matter; n(IP, Ia) matters only if
     // n(Ia, INN) > n(Ia, IN); the three-view counts only if the two-view rule fails.
     const auto& sw = options_.switching;
-    const bool guard_blocks = sw.min_next_scale_ratio > 0.0 &&
-                              counts.next_scale_ratio < sw.min_next_scale_ratio;  // NaN: false
+    const bool guard_blocks = counts.before_by_odometry ||
+                              (sw.min_next_scale_ratio > 0.0 &&
+                               counts.next_scale_ratio < sw.min_next_scale_ratio);  // NaN: false
     if (!guard_blocks) {
       bool two_view_rule = false;
       if (counts.two_view_next_next > counts.two_view_next) {

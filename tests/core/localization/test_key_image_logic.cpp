@@ -185,6 +185,26 @@ TEST(KeyImageSwitcher, ScaleGuardAndAnUnknownRatio) {
   EXPECT_EQ(bad.validate().size(), 1u);
 }
 
+// "IN ahead by odometry": the caller says the estimate is still well before IN; a paper rule
+// that holds with the scale guard satisfied is blocked, and switches once the verdict is gone.
+TEST(KeyImageSwitcher, TheEstimateBeforeInBlocksThePaperRules) {
+  KeyImageSwitcher s(segment_ending_at(1, 6), 6);
+  SwitchCounts c = three_view(50, 20);  // the three-view rule holds...
+  c.next_scale_ratio = 0.95;            // ...and the scale guard lets it through...
+  c.before_by_odometry = true;          // ...but the odometry says IN is still ahead
+  for (int i = 0; i < 4; ++i) {
+    const SwitchUpdate u = s.update(c, false);
+    EXPECT_EQ(u.event, SwitchEvent::kNone);
+    EXPECT_EQ(u.streak, 0);
+    EXPECT_EQ(u.criteria_bits, 1 | kCriterionGuardBlocked);
+  }
+  EXPECT_EQ(s.segment().next, 1);
+  c.before_by_odometry = false;
+  EXPECT_EQ(s.update(c, false).event, SwitchEvent::kNone);
+  EXPECT_EQ(s.update(c, false).event, SwitchEvent::kSwitched);
+  EXPECT_EQ(s.segment().next, 2);
+}
+
 // "Passed IN by distance": the caller says the robot drove well past IN with the scale unknown;
 // with no paper rule and no ratio, that alone makes the switch wanted (two frames, as for any).
 TEST(KeyImageSwitcher, PassedByDistanceSwitchesWithoutAnyCount) {

@@ -79,6 +79,11 @@ struct SwitchCounts {
   /// (the navigator: navigator/path_tracker.hpp; at once while the scale ratio is unknown, by 2
   /// sigmas of the estimate along the robot while it is known): a switch is wanted (bit 32).
   bool passed_by_odometry = false;
+  /// The caller's verdict that the robot's odometry, carried along the taught path, is still
+  /// before IN (the navigator: by 2 sigmas of the estimate along the robot): it blocks the
+  /// paper's rules as the scale guard does (bit 8). A count rule that fires there would turn
+  /// the robot onto the next segment early.
+  bool before_by_odometry = false;
 };
 
 /// Bit set of the criteria that held: 1 three-view rule, 2 two-view rule (paper), 8 blocked by
