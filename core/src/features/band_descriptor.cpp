@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <exception>
+#include <thread>
 
 namespace pepper::core::features {
 namespace {
@@ -72,15 +74,14 @@ void orient_segment(const cv::Mat& gray, cv::Point2f& p0_px, cv::Point2f& p1_px)
   if (acc < 0.0f) std::swap(p0_px, p1_px);
 }
 
-cv::Mat compute_band_descriptors(const cv::Mat& gray,
-                                 const std::vector<std::pair<cv::Point2f, cv::Point2f>>& segments,
-                                 int band_width_px, int samples_along) {
-  const int rows = kBands * band_width_px;
-  cv::Mat desc(static_cast<int>(segments.size()), kBands * 8, CV_32F, cv::Scalar(0));
-  if (segments.empty() || gray.empty()) return desc;
-  const int w = gray.cols, h = gray.rows;
-  const std::vector<int16_t> grad = gradient_image(gray);
+namespace {
 
+// Rows [begin, end) of `desc` (see compute_band_descriptors); `grad` is gradient_image(gray).
+void band_descriptor_rows(const std::vector<int16_t>& grad, int w, int h,
+                          const std::vector<std::pair<cv::Point2f, cv::Point2f>>& segments,
+                          size_t begin, size_t end, int band_width_px, int samples_along,
+                          cv::Mat& desc) {
+  const int rows = kBands * band_width_px;
   // Global Gaussian weight over the row offset (sigma = half the region width).
   std::vector<float> wg(rows);
   const float half = 0.5f * static_cast<float>(rows - 1);
@@ -95,7 +96,7 @@ cv::Mat compute_band_descriptors(const cv::Mat& gray,
   std::vector<int> at(rows);
   for (int r = 0; r < rows; ++r) off[r] = static_cast<float>(r) - half;
 
-  for (size_t i = 0; i < segments.size(); ++i) {
+  for (size_t i = begin; i < end; ++i) {
     const cv::Point2f p0 = segments[i].first;
     const cv::Point2f dvec = segments[i].second - p0;
     const float len = std::hypot(dvec.x, dvec.y);
@@ -166,6 +167,37 @@ cv::Mat compute_band_descriptors(const cv::Mat& gray,
     normalise(out + kBands * 4, kBands * 4);
     for (int j = 0; j < kBands * 8; ++j) out[j] = std::min(out[j], kClip);
     normalise(out, kBands * 8);
+  }
+}
+
+}  // namespace
+
+cv::Mat compute_band_descriptors(const cv::Mat& gray,
+                                 const std::vector<std::pair<cv::Point2f, cv::Point2f>>& segments,
+                                 int band_width_px, int samples_along, int threads) {
+  cv::Mat desc(static_cast<int>(segments.size()), kBands * 8, CV_32F, cv::Scalar(0));
+  if (segments.empty() || gray.empty()) return desc;
+  const std::vector<int16_t> grad = gradient_image(gray);
+  // Each row depends on its own segment only: contiguous ranges of rows, the first on the
+  // calling thread, give the very matrix one thread gives.
+  const size_t n = segments.size();
+  const size_t parts = std::clamp<size_t>(static_cast<size_t>(std::max(threads, 1)), 1, n);
+  std::vector<std::exception_ptr> errors(parts);  // bad_alloc of a range's scratch vectors
+  auto rows = [&](size_t part) noexcept {
+    try {
+      band_descriptor_rows(grad, gray.cols, gray.rows, segments, part * n / parts,
+                           (part + 1) * n / parts, band_width_px, samples_along, desc);
+    } catch (...) {
+      errors[part] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> helpers;
+  helpers.reserve(parts - 1);
+  for (size_t part = 1; part < parts; ++part) helpers.emplace_back(rows, part);
+  rows(0);
+  for (std::thread& t : helpers) t.join();
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
   }
   return desc;
 }

@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include <opencv2/core/hal/intrin.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -39,7 +42,8 @@ constexpr int kMinSideForLines = 16;
 constexpr int kMinSideForOrb = 80;
 
 std::vector<LineSegment> detect_lines(const cv::Mat& gray, const CameraIntrinsics& k,
-                                      const FeatureExtractorOptions& o, cv::Mat& descriptors) {
+                                      const FeatureExtractorOptions& o, cv::Mat& descriptors,
+                                      int descriptor_threads) {
   std::vector<LineSegment> out;
   descriptors = cv::Mat(0, kLbdDims, CV_32F);
   if (gray.cols < kMinSideForLines || gray.rows < kMinSideForLines) return out;
@@ -85,7 +89,8 @@ std::vector<LineSegment> detect_lines(const cv::Mat& gray, const CameraIntrinsic
     out.push_back(s);
     segs.emplace_back(p0, p1);
   }
-  descriptors = compute_band_descriptors(gray, segs, o.lbd_band_width_px, o.lbd_samples_along);
+  descriptors = compute_band_descriptors(gray, segs, o.lbd_band_width_px, o.lbd_samples_along,
+                                         descriptor_threads);
   return out;
 }
 
@@ -282,13 +287,46 @@ ImageFeatures FeatureExtractor::extract(const cv::Mat& gray, unsigned parts) con
   // The lines and the KLT pyramid both work on the normalised image: computed once.
   cv::Mat normalised;
   if (parts & (kPartLines | kPartPyramid)) normalised = klt_image(gray, options_.klt);
-  if (parts & kPartLines) f.lines = detect_lines(normalised, f.intrinsics, options_, f.line_descriptors);
-  else f.line_descriptors = cv::Mat(0, kLbdDims, CV_32F);
-  if (parts & kPartCorners) f.corners_px = detect_corners(gray, options_);
-  if (parts & kPartWideBaseline) add_wide_baseline(f);
-  // Scharr derivatives only for images tracked from (they have corners).
-  if (parts & kPartPyramid)
-    build_klt_pyramid_on(f, normalised, options_.klt, (parts & kPartCorners) != 0);
+  // Everything but the lines; each part writes its own fields of f.
+  auto other_parts = [&] {
+    if (parts & kPartCorners) f.corners_px = detect_corners(gray, options_);
+    if (parts & kPartWideBaseline) add_wide_baseline(f);
+    // Scharr derivatives only for images tracked from (they have corners).
+    if (parts & kPartPyramid)
+      build_klt_pyramid_on(f, normalised, options_.klt, (parts & kPartCorners) != 0);
+  };
+  if (!(parts & kPartLines)) {
+    f.line_descriptors = cv::Mat(0, kLbdDims, CV_32F);
+    other_parts();
+    return f;
+  }
+  // The lines are most of an extraction (EdgeDrawing, then the descriptors): with a second core
+  // (cv::getNumThreads() > 1, as FrameMatcher::concurrent()), the other parts run on a thread
+  // of their own meanwhile, and the descriptors are computed in two halves. The same features
+  // as on one thread, bit for bit (test_image_features.cpp).
+  if (cv::getNumThreads() <= 1 || !(parts & ~kPartLines)) {
+    f.lines = detect_lines(normalised, f.intrinsics, options_, f.line_descriptors,
+                           cv::getNumThreads() > 1 ? 2 : 1);
+    other_parts();
+    return f;
+  }
+  std::exception_ptr other_error;
+  std::thread other([&]() noexcept {
+    try {
+      other_parts();
+    } catch (...) {
+      other_error = std::current_exception();
+    }
+  });
+  std::exception_ptr lines_error;
+  try {
+    f.lines = detect_lines(normalised, f.intrinsics, options_, f.line_descriptors, 2);
+  } catch (...) {
+    lines_error = std::current_exception();
+  }
+  other.join();
+  if (lines_error) std::rethrow_exception(lines_error);
+  if (other_error) std::rethrow_exception(other_error);
   return f;
 }
 

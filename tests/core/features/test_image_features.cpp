@@ -2,11 +2,15 @@
 #include "core/features/image_features.hpp"
 
 #include <cmath>
+#include <string>
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/features/matching.hpp"
+#include "real_image_data.hpp"
 
 namespace pepper::core::features {
 namespace {
@@ -34,6 +38,48 @@ cv::Mat drawn_scene(int w, int h, int dx_px = 0) {
   // A camera's blur (FAST finds few corners on perfectly crisp squares).
   cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
   return img;
+}
+
+// Extraction on two threads (cv::getNumThreads() > 1: the lines beside the other parts, the
+// descriptors in two halves) gives the very features of one thread, on a real Pepper image at
+// QVGA and upscaled to VGA (over a hundred lines: both halves of the descriptors are used).
+TEST(FeatureExtractor, TwoThreadsGiveTheFeaturesOfOne) {
+  const std::string file = test_data::kPepper + "Edge_01/img_00014.png";
+  const cv::Mat colour = cv::imread(file, cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(colour.empty()) << "missing " << file;
+  const cv::Mat qvga = to_gray(colour);
+  cv::Mat vga;
+  cv::resize(qvga, vga, cv::Size(640, 480), 0, 0, cv::INTER_LINEAR);
+  const int threads_before = cv::getNumThreads();
+  for (const cv::Mat& gray : {qvga, vga}) {
+    const FeatureExtractor ex(test_data::pepper_qvga().scaled_to(gray.cols, gray.rows));
+    for (const unsigned parts :
+         {unsigned{kPartsAll}, unsigned{kPartsCurrentFrame}, unsigned{kPartLines}}) {
+      SCOPED_TRACE(std::to_string(gray.cols) + " px, parts " + std::to_string(parts));
+      cv::setNumThreads(1);
+      const ImageFeatures one = ex.extract(gray, parts);
+      cv::setNumThreads(2);
+      const ImageFeatures two = ex.extract(gray, parts);
+      cv::setNumThreads(threads_before);
+      ASSERT_GT(one.lines.size(), gray.cols > 320 ? 60u : 20u);
+      ASSERT_EQ(one.lines.size(), two.lines.size());
+      for (size_t i = 0; i < one.lines.size(); ++i) {
+        EXPECT_EQ(one.lines[i].p0_px, two.lines[i].p0_px);
+        EXPECT_EQ(one.lines[i].p1_px, two.lines[i].p1_px);
+      }
+      ASSERT_EQ(one.line_descriptors.size(), two.line_descriptors.size());
+      EXPECT_EQ(cv::norm(one.line_descriptors, two.line_descriptors, cv::NORM_INF), 0.0);
+      EXPECT_EQ(one.corners_px, two.corners_px);
+      ASSERT_EQ(one.keypoints.size(), two.keypoints.size());
+      if (!one.keypoints.empty()) {
+        EXPECT_EQ(cv::norm(one.keypoint_descriptors, two.keypoint_descriptors, cv::NORM_INF), 0.0);
+      }
+      ASSERT_EQ(one.klt_pyramid.size(), two.klt_pyramid.size());
+      for (size_t l = 0; l < one.klt_pyramid.size(); ++l) {
+        EXPECT_EQ(cv::norm(one.klt_pyramid[l], two.klt_pyramid[l], cv::NORM_INF), 0.0);
+      }
+    }
+  }
 }
 
 TEST(FeatureExtractor, RejectsEmptyAndNonGreyImages) {

@@ -29,9 +29,12 @@ namespace pepper::core::features {
 void orient_segment(const cv::Mat& gray, cv::Point2f& p0_px, cv::Point2f& p1_px);
 
 /// Descriptors of the given segments (rows of a CV_32F matrix, 72 columns). `gray` CV_8UC1.
-/// Segments shorter than 1 px give a zero row.
+/// Segments shorter than 1 px give a zero row. `threads` > 1 splits the segments into that
+/// many contiguous ranges, the first computed on the calling thread and each other one on a
+/// thread started and joined by this call: the same matrix, bit for bit (each row depends on
+/// its own segment only).
 cv::Mat compute_band_descriptors(const cv::Mat& gray,
                                  const std::vector<std::pair<cv::Point2f, cv::Point2f>>& segments,
-                                 int band_width_px = 5, int samples_along = 32);
+                                 int band_width_px = 5, int samples_along = 32, int threads = 1);
 
 }  // namespace pepper::core::features

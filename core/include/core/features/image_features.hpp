@@ -156,7 +156,10 @@ class FeatureExtractor {
 
   /// Computes the requested parts of `gray`. Throws std::invalid_argument when `gray` is empty or
   /// not CV_8UC1 (message gives the type). Any size works; a textureless image gives empty
-  /// feature lists. `gray` is shared (not copied) into the result.
+  /// feature lists. `gray` is shared (not copied) into the result. With cv::getNumThreads() > 1
+  /// the lines are computed on the calling thread (their descriptors in two halves, one on a
+  /// second thread) while the other parts run on a thread of their own, all joined before the
+  /// call returns: the same features, bit for bit, as with cv::setNumThreads(1).
   ImageFeatures extract(const cv::Mat& gray, unsigned parts = kPartsAll) const;
 
   /// Adds the wide-baseline part (ORB keypoints and descriptors) to features extracted without
