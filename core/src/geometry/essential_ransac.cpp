@@ -2,6 +2,7 @@
 #include "core/geometry/essential_ransac.hpp"
 
 #include "core/geometry/planar_essential.hpp"
+#include "core/geometry/sampson.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -21,11 +22,7 @@ namespace {
 
 // Squared Sampson distance of a correspondence to E (normalised units).
 double sampson2(const Eigen::Matrix3d& E, const cv::Point2d& a, const cv::Point2d& b) {
-  const Eigen::Vector3d xa(a.x, a.y, 1.0), xb(b.x, b.y, 1.0);
-  const Eigen::Vector3d Ea = E * xa, Etb = E.transpose() * xb;
-  const double num = xb.dot(Ea);
-  const double den = Ea(0) * Ea(0) + Ea(1) * Ea(1) + Etb(0) * Etb(0) + Etb(1) * Etb(1);
-  return den > 0 ? num * num / den : std::numeric_limits<double>::infinity();
+  return sampson_squared(E, Eigen::Vector3d(a.x, a.y, 1.0), Eigen::Vector3d(b.x, b.y, 1.0));
 }
 
 // Indices of the correspondences within `thr` (Sampson distance, normalised units) of E.
@@ -76,10 +73,8 @@ std::vector<int> grow_by_linear_refit(const std::vector<cv::Point2d>& a,
 
 // Signed Sampson distance of a correspondence to E (normalised units).
 double sampson_signed(const Eigen::Matrix3d& E, const cv::Point2d& a, const cv::Point2d& b) {
-  const Eigen::Vector3d xa(a.x, a.y, 1.0), xb(b.x, b.y, 1.0);
-  const Eigen::Vector3d Ea = E * xa, Etb = E.transpose() * xb;
-  const double den = Ea(0) * Ea(0) + Ea(1) * Ea(1) + Etb(0) * Etb(0) + Etb(1) * Etb(1);
-  return den > 0 ? xb.dot(Ea) / std::sqrt(den) : std::numeric_limits<double>::infinity();
+  return geometry::sampson_signed(E, Eigen::Vector3d(a.x, a.y, 1.0),
+                                  Eigen::Vector3d(b.x, b.y, 1.0));
 }
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {

@@ -1,6 +1,7 @@
 // Planar-motion essential matrix: 2-point RANSAC with Gauss-Newton refinement
 // (see planar_essential.hpp).
 #include "core/geometry/planar_essential.hpp"
+#include "core/geometry/sampson.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -55,14 +56,6 @@ struct Problem {
   Eigen::Matrix3d essential_cam(const Angles& m) const { return P.transpose() * essential_level(m) * P; }
 };
 
-// Signed Sampson residual (normalised units); +inf when the point is on both epipoles.
-double sampson(const Eigen::Matrix3d& E, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb) {
-  const Eigen::Vector3d Ea = E * xa, Etb = E.transpose() * xb;
-  const double den = Ea(0) * Ea(0) + Ea(1) * Ea(1) + Etb(0) * Etb(0) + Etb(1) * Etb(1);
-  if (!(den > 0.0)) return std::numeric_limits<double>::infinity();
-  return xb.dot(Ea) / std::sqrt(den);
-}
-
 // MSAC cost (sum of truncated squared Sampson distances) and inlier count of a model.
 struct Score {
   double cost = std::numeric_limits<double>::infinity();
@@ -74,7 +67,7 @@ Score score(const Problem& p, const Angles& m) {
   Score s{0.0, 0};
   const size_t n = p.a_cam.size();
   for (size_t i = 0; i < n; ++i) {
-    const double r = sampson(E, p.a_cam[i], p.b_cam[i]);
+    const double r = sampson_signed(E, p.a_cam[i], p.b_cam[i]);
     const double r2 = r * r;
     if (r2 <= p.thr2) {
       s.cost += r2;
@@ -92,7 +85,7 @@ std::vector<int> classify(const Problem& p, const Angles& m, double factor = 1.0
   const double thr2 = p.thr2 * factor * factor;
   std::vector<int> idx;
   for (size_t i = 0; i < p.a_cam.size(); ++i) {
-    const double r = sampson(E, p.a_cam[i], p.b_cam[i]);
+    const double r = sampson_signed(E, p.a_cam[i], p.b_cam[i]);
     if (r * r <= thr2) idx.push_back(static_cast<int>(i));
   }
   return idx;
@@ -143,9 +136,10 @@ Angles refine(const Problem& p, Angles m, const std::vector<int>& idx) {
     for (const int k : idx) {
       const auto& xa = p.a_cam[static_cast<size_t>(k)];
       const auto& xb = p.b_cam[static_cast<size_t>(k)];
-      const double r = sampson(E0, xa, xb);
+      const double r = sampson_signed(E0, xa, xb);
       if (!std::isfinite(r)) continue;
-      const Eigen::Vector2d J((sampson(Ep, xa, xb) - r) / kStep, (sampson(Ey, xa, xb) - r) / kStep);
+      const Eigen::Vector2d J((sampson_signed(Ep, xa, xb) - r) / kStep,
+                              (sampson_signed(Ey, xa, xb) - r) / kStep);
       if (!J.allFinite()) continue;
       JtJ += J * J.transpose();
       Jtr += J * r;
