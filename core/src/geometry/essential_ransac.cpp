@@ -261,7 +261,6 @@ Decomposition best_decomposition(const Eigen::Matrix3d& E, const std::vector<cv:
 bool five_point(const std::vector<cv::Point2d>& a_norm, const std::vector<cv::Point2d>& b_norm,
                 double focal_px, const EssentialRansacOptions& options, bool ranked,
                 Eigen::Matrix3d& Em, std::vector<int>& inl) {
-  const int n = static_cast<int>(a_norm.size());
   cv::Mat mask;
   cv::Mat E;
   // PROSAC draws samples from the best-ranked matches first. With (near) zero baseline its
@@ -300,22 +299,7 @@ bool five_point(const std::vector<cv::Point2d>& a_norm, const std::vector<cv::Po
   // (Sampson distance within the threshold) and reclassify, while the inlier count grows.
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) Em(i, j) = E.at<double>(i, j);
-  const double thr2 = (options.threshold_px / focal_px) * (options.threshold_px / focal_px);
-  auto classify = [&](const Eigen::Matrix3d& M) {
-    std::vector<int> idx;
-    for (int i = 0; i < n; ++i)
-      if (sampson2(M, a_norm[static_cast<size_t>(i)], b_norm[static_cast<size_t>(i)]) <= thr2) idx.push_back(i);
-    return idx;
-  };
-  inl = classify(Em);
-  for (int round = 0; round < 3; ++round) {
-    Eigen::Matrix3d Er;
-    if (!fit_linear(a_norm, b_norm, inl, Er)) break;
-    std::vector<int> inl2 = classify(Er);
-    if (inl2.size() <= inl.size()) break;
-    inl = std::move(inl2);
-    Em = Er;
-  }
+  inl = grow_by_linear_refit(a_norm, b_norm, options.threshold_px / focal_px, Em);
   return true;
 }
 
