@@ -57,6 +57,11 @@ std::optional<core::Frame> MockBridge::next_frame(std::chrono::milliseconds /*ti
   return wifi_.transmit(frame, robot_.now_ns());
 }
 
+std::chrono::nanoseconds MockBridge::stall_clock() const {
+  std::lock_guard lock(mutex_);
+  return std::chrono::nanoseconds(robot_.now_ns());
+}
+
 HeadLockStatus MockBridge::lock_head(const HeadLockRequest& request) {
   std::lock_guard lock(mutex_);
   if (state_ != ConnectionState::kConnected)

@@ -37,6 +37,8 @@ class MockBridge final : public RobotBridge {
   void connect() override;
   core::CameraIntrinsics start_camera(const CameraRequest& request) override;
   std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override;
+  /// The simulated time (SimRobot::now_ns): a stall is one of the simulated camera.
+  std::chrono::nanoseconds stall_clock() const override;
   HeadLockStatus lock_head(const HeadLockRequest& request) override;
   void move(const BaseVelocity& velocity) override;
   void stop() noexcept override;

@@ -100,6 +100,15 @@ class RobotBridge {
   /// an error: odometry_problem()). Throws BridgeError on a lost link.
   virtual std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) = 0;
 
+  /// The clock a session measures a camera stall on ("no frame for frame_timeout_s"): the
+  /// laptop's steady clock for a real robot (a frozen or overloaded laptop sees the stall it
+  /// caused, and stops the base); a simulated robot's own time for a simulated one, where a
+  /// paused or loaded evaluation process would otherwise see a stall the simulated camera never
+  /// had. Any epoch; only differences count.
+  virtual std::chrono::nanoseconds stall_clock() const {
+    return std::chrono::steady_clock::now().time_since_epoch();
+  }
+
   /// Stiffens and holds head (and hip/knee) joints, turns autonomous head motion off, and reads
   /// the angles back. The previous autonomy state is restored by release().
   virtual HeadLockStatus lock_head(const HeadLockRequest& request) = 0;

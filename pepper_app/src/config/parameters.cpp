@@ -685,7 +685,8 @@ std::vector<Parameter> build_table() {
         "the bridge stops the base without a fresh command this long"),
     row("robot.frame_timeout_s",
         robot, &RobotConfig::frame_timeout_s, "s", "[0.1, 10]",
-        "the session stops the base when no frame comes this long"),
+        "the session stops the base when no frame comes this long (a simulated robot: its "
+        "simulated time)"),
     row("robot.deadman_horizon_s",
         robot, &RobotConfig::deadman_horizon_s, "s", "0 (off) or [0.05, 2]",
         "tcp/tcps robots: each velocity command ends by itself on the robot after this long "

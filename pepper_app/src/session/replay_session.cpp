@@ -237,7 +237,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
 
     bool started = !options.wait_for_start;
     if (!started) link.publish_state({{"replay", {{"state", "stopped"}}}});
-    auto last_frame_at = Clock::now();
+    auto last_frame_at = bridge.stall_clock();
     int64_t t0_ns = -1;
     int last_in = -2;
     int64_t last_moving_t_ns = -1;
@@ -293,7 +293,8 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       }
       auto frame = bridge.next_frame(std::chrono::milliseconds(100));
       if (!frame) {
-        if (Clock::now() - last_frame_at > std::chrono::milliseconds(options.frame_timeout_ms)) {
+        if (bridge.stall_clock() - last_frame_at >
+            std::chrono::milliseconds(options.frame_timeout_ms)) {
           end_with("frame_timeout",
                    "no camera frame for " + std::to_string(options.frame_timeout_ms) +
                        " ms: check the camera with `pepper_app doctor --robot URL` (another "
@@ -308,7 +309,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         }
         continue;
       }
-      last_frame_at = Clock::now();
+      last_frame_at = bridge.stall_clock();
       if (t0_ns < 0) t0_ns = frame->t_ns;
       ++result.frames;
       if (writer) writer->append(*frame, 0.0, 0.0);

@@ -221,7 +221,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
     Clock::time_point drive_at{};
     nb::BaseVelocity sent{};  // what the base is doing
     bool moving = false;
-    auto last_frame_at = Clock::now();
+    auto last_frame_at = bridge.stall_clock();
     bool stalled = false;
     int64_t t0_ns = -1;
     std::optional<Eigen::Vector2d> prev_pos;
@@ -284,7 +284,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
 
       auto frame = bridge.next_frame(std::chrono::milliseconds(100));
       if (!frame) {
-        if (!stalled && Clock::now() - last_frame_at >
+        if (!stalled && bridge.stall_clock() - last_frame_at >
                             std::chrono::milliseconds(options.frame_timeout_ms)) {
           stalled = true;
           stop_base("frame_timeout");
@@ -297,7 +297,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         }
         continue;
       }
-      last_frame_at = Clock::now();
+      last_frame_at = bridge.stall_clock();
       if (stalled) {
         stalled = false;
         link.publish_state({{"stop_reason", nullptr}});

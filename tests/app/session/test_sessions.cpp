@@ -141,6 +141,65 @@ TEST(ReplaySessionSafety, StalledFramesStop) {
   EXPECT_TRUE(last_is_stop(*robot.mock));
 }
 
+/// A simulated robot's link whose laptop freezes once: after `good_frames` frames, the next call
+/// takes `pause` of wall time and its frame is lost on the way (a WiFi drop); the simulated camera
+/// went on at its own rate meanwhile, and later frames arrive again.
+class PausedProcessBridge final : public nb::RobotBridge {
+ public:
+  PausedProcessBridge(std::unique_ptr<nb::RobotBridge> inner, int good_frames,
+                      std::chrono::milliseconds pause)
+      : inner_(std::move(inner)), left_(good_frames), pause_(pause) {}
+  void connect() override { inner_->connect(); }
+  core::CameraIntrinsics start_camera(const nb::CameraRequest& r) override {
+    return inner_->start_camera(r);
+  }
+  std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override {
+    auto frame = inner_->next_frame(timeout);
+    if (left_-- == 0) {
+      std::this_thread::sleep_for(pause_);
+      return std::nullopt;
+    }
+    return frame;
+  }
+  std::chrono::nanoseconds stall_clock() const override { return inner_->stall_clock(); }
+  nb::HeadLockStatus lock_head(const nb::HeadLockRequest& r) override {
+    return inner_->lock_head(r);
+  }
+  void move(const nb::BaseVelocity& v) override { inner_->move(v); }
+  void stop() noexcept override { inner_->stop(); }
+  void release() noexcept override { inner_->release(); }
+  nb::ConnectionState state() const override { return inner_->state(); }
+  std::string describe() const override { return "paused " + inner_->describe(); }
+
+ private:
+  std::unique_ptr<nb::RobotBridge> inner_;
+  int left_;
+  std::chrono::milliseconds pause_;
+};
+
+// On a simulated robot the camera stall is measured on the simulated clock: a laptop process
+// paused for longer than frame_timeout (SIGSTOP, a loaded machine) right before a dropped frame
+// is not a stall of the simulated camera (an evaluation once ended a run with frame_timeout so).
+// On a real robot the steady clock decides (StalledFramesStop above: the default stall_clock).
+TEST(ReplaySessionSafety, APausedProcessIsNoStallOfASimulatedCamera) {
+  reset_interrupt();
+  RobotConnection robot = open_robot(kWorld, {});
+  ReplaySessionOptions o = replay_options();
+  robot.bridge = std::make_unique<PausedProcessBridge>(
+      std::move(robot.bridge), 8, std::chrono::milliseconds(o.frame_timeout_ms + 150));
+  SessionLink link(nullptr, nullptr);
+  int n = 0;
+  const ReplayResult r = run_replay_session(robot, dummy_map(robot), o, link,
+                                            [&](const core::Frame& f) {
+                                              if (++n == 20) request_interrupt();
+                                              return driving_step(f);
+                                            });
+  reset_interrupt();
+  EXPECT_EQ(r.outcome, "interrupted");
+  EXPECT_EQ(n, 20);
+  EXPECT_TRUE(last_is_stop(*robot.mock));
+}
+
 TEST(ReplaySessionSafety, UiStopStops) {
   RobotConnection robot = open_robot(kWorld, {});
   SessionLink link(nullptr, nullptr);
