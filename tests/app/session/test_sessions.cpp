@@ -101,19 +101,17 @@ TEST(ReplaySessionSafety, ExceptionFromCoreEndsWithStop) {
   EXPECT_TRUE(last_is_stop(*robot.mock));
 }
 
-/// Delivers `good_frames` frames, then none (a camera that stalls).
-class StallingBridge final : public nb::RobotBridge {
+/// Passes every call to the bridge it wraps, but the stall clock: the steady clock, as a real
+/// robot's bridge has (RobotBridge's own).
+class ForwardingBridge : public nb::RobotBridge {
  public:
-  StallingBridge(std::unique_ptr<nb::RobotBridge> inner, int good_frames)
-      : inner_(std::move(inner)), left_(good_frames) {}
+  explicit ForwardingBridge(std::unique_ptr<nb::RobotBridge> inner) : inner_(std::move(inner)) {}
   void connect() override { inner_->connect(); }
   core::CameraIntrinsics start_camera(const nb::CameraRequest& r) override {
     return inner_->start_camera(r);
   }
   std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override {
-    if (left_-- > 0) return inner_->next_frame(timeout);
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    return std::nullopt;
+    return inner_->next_frame(timeout);
   }
   nb::HeadLockStatus lock_head(const nb::HeadLockRequest& r) override {
     return inner_->lock_head(r);
@@ -122,10 +120,24 @@ class StallingBridge final : public nb::RobotBridge {
   void stop() noexcept override { inner_->stop(); }
   void release() noexcept override { inner_->release(); }
   nb::ConnectionState state() const override { return inner_->state(); }
-  std::string describe() const override { return "stalling " + inner_->describe(); }
+  std::string describe() const override { return "forwarding " + inner_->describe(); }
+
+ protected:
+  std::unique_ptr<nb::RobotBridge> inner_;
+};
+
+/// Delivers `good_frames` frames, then none (a camera that stalls).
+class StallingBridge final : public ForwardingBridge {
+ public:
+  StallingBridge(std::unique_ptr<nb::RobotBridge> inner, int good_frames)
+      : ForwardingBridge(std::move(inner)), left_(good_frames) {}
+  std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override {
+    if (left_-- > 0) return inner_->next_frame(timeout);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return std::nullopt;
+  }
 
  private:
-  std::unique_ptr<nb::RobotBridge> inner_;
   int left_;
 };
 
@@ -143,16 +155,13 @@ TEST(ReplaySessionSafety, StalledFramesStop) {
 
 /// A simulated robot's link whose laptop freezes once: after `good_frames` frames, the next call
 /// takes `pause` of wall time and its frame is lost on the way (a WiFi drop); the simulated camera
-/// went on at its own rate meanwhile, and later frames arrive again.
-class PausedProcessBridge final : public nb::RobotBridge {
+/// went on at its own rate meanwhile, and later frames arrive again. Its stall clock is the
+/// simulated robot's.
+class PausedProcessBridge final : public ForwardingBridge {
  public:
   PausedProcessBridge(std::unique_ptr<nb::RobotBridge> inner, int good_frames,
                       std::chrono::milliseconds pause)
-      : inner_(std::move(inner)), left_(good_frames), pause_(pause) {}
-  void connect() override { inner_->connect(); }
-  core::CameraIntrinsics start_camera(const nb::CameraRequest& r) override {
-    return inner_->start_camera(r);
-  }
+      : ForwardingBridge(std::move(inner)), left_(good_frames), pause_(pause) {}
   std::optional<core::Frame> next_frame(std::chrono::milliseconds timeout) override {
     auto frame = inner_->next_frame(timeout);
     if (left_-- == 0) {
@@ -162,17 +171,8 @@ class PausedProcessBridge final : public nb::RobotBridge {
     return frame;
   }
   std::chrono::nanoseconds stall_clock() const override { return inner_->stall_clock(); }
-  nb::HeadLockStatus lock_head(const nb::HeadLockRequest& r) override {
-    return inner_->lock_head(r);
-  }
-  void move(const nb::BaseVelocity& v) override { inner_->move(v); }
-  void stop() noexcept override { inner_->stop(); }
-  void release() noexcept override { inner_->release(); }
-  nb::ConnectionState state() const override { return inner_->state(); }
-  std::string describe() const override { return "paused " + inner_->describe(); }
 
  private:
-  std::unique_ptr<nb::RobotBridge> inner_;
   int left_;
   std::chrono::milliseconds pause_;
 };
