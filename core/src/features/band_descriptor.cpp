@@ -1,12 +1,12 @@
 // LBD-style band descriptor (see band_descriptor.hpp).
 #include "core/features/band_descriptor.hpp"
 
+#include "core/features/concurrent_tasks.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <exception>
-#include <thread>
 
 namespace pepper::core::features {
 namespace {
@@ -182,23 +182,10 @@ cv::Mat compute_band_descriptors(const cv::Mat& gray,
   // calling thread, give the very matrix one thread gives.
   const size_t n = segments.size();
   const size_t parts = std::clamp<size_t>(static_cast<size_t>(std::max(threads, 1)), 1, n);
-  std::vector<std::exception_ptr> errors(parts);  // bad_alloc of a range's scratch vectors
-  auto rows = [&](size_t part) noexcept {
-    try {
-      band_descriptor_rows(grad, gray.cols, gray.rows, segments, part * n / parts,
-                           (part + 1) * n / parts, band_width_px, samples_along, desc);
-    } catch (...) {
-      errors[part] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> helpers;
-  helpers.reserve(parts - 1);
-  for (size_t part = 1; part < parts; ++part) helpers.emplace_back(rows, part);
-  rows(0);
-  for (std::thread& t : helpers) t.join();
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+  run_concurrently(parts, [&](size_t part) {
+    band_descriptor_rows(grad, gray.cols, gray.rows, segments, part * n / parts,
+                         (part + 1) * n / parts, band_width_px, samples_along, desc);
+  });
   return desc;
 }
 

@@ -3,10 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 #include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/core/utility.hpp>
@@ -17,6 +15,7 @@
 
 #include "core/camera/distortion.hpp"
 #include "core/features/band_descriptor.hpp"
+#include "core/features/concurrent_tasks.hpp"
 
 namespace pepper::core::features {
 namespace {
@@ -304,29 +303,20 @@ ImageFeatures FeatureExtractor::extract(const cv::Mat& gray, unsigned parts) con
   // (cv::getNumThreads() > 1, as FrameMatcher::concurrent()), the other parts run on a thread
   // of their own meanwhile, and the descriptors are computed in two halves. The same features
   // as on one thread, bit for bit (test_image_features.cpp).
-  if (cv::getNumThreads() <= 1 || !(parts & ~kPartLines)) {
+  const bool concurrent = cv::getNumThreads() > 1;
+  if (!concurrent || !(parts & ~kPartLines)) {
     f.lines = detect_lines(normalised, f.intrinsics, options_, f.line_descriptors,
-                           cv::getNumThreads() > 1 ? 2 : 1);
+                           concurrent ? 2 : 1);
     other_parts();
     return f;
   }
-  std::exception_ptr other_error;
-  std::thread other([&]() noexcept {
-    try {
+  run_concurrently(2, [&](size_t task) {
+    if (task == 0) {
+      f.lines = detect_lines(normalised, f.intrinsics, options_, f.line_descriptors, 2);
+    } else {
       other_parts();
-    } catch (...) {
-      other_error = std::current_exception();
     }
   });
-  std::exception_ptr lines_error;
-  try {
-    f.lines = detect_lines(normalised, f.intrinsics, options_, f.line_descriptors, 2);
-  } catch (...) {
-    lines_error = std::current_exception();
-  }
-  other.join();
-  if (lines_error) std::rethrow_exception(lines_error);
-  if (other_error) std::rethrow_exception(other_error);
   return f;
 }
 

@@ -1,6 +1,8 @@
 // Two-view, three-view and wide-baseline verified matching (see matching.hpp).
 #include "core/features/matching.hpp"
 
+#include "core/features/concurrent_tasks.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,7 +11,6 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 // The core runs single-threaded (ARCHITECTURE.md): no OpenMP inside Eigen products.
 #ifndef EIGEN_DONT_PARALLELIZE
@@ -784,17 +785,10 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
       t.error = std::current_exception();
     }
   };
-  // The first task on the calling thread, each other one on a thread of its own, joined here.
-  // Plain threads rather than cv::parallel_for_: a TBB caller that finishes first spins until
-  // the other task is done (measured: its CPU time did not fall), and the spin takes the core
-  // from whatever else runs. cv::getNumThreads() <= 1 (the one-core benchmarks) keeps
-  // everything on the calling thread.
-  std::vector<std::thread> helpers;
+  // concurrent_tasks.hpp says why plain threads. cv::getNumThreads() <= 1 (the one-core
+  // benchmarks) keeps everything on the calling thread.
   if (concurrent()) {
-    helpers.reserve(tasks.size() - 1);
-    for (size_t i = 1; i < tasks.size(); ++i) helpers.emplace_back(run, std::ref(tasks[i]));
-    run(tasks.front());
-    for (std::thread& h : helpers) h.join();
+    run_concurrently(tasks.size(), [&](size_t i) { run(tasks[i]); });
   } else {
     for (Task& t : tasks) run(t);
   }
