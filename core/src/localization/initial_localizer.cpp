@@ -106,22 +106,15 @@ InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
   const int n = static_cast<int>(map.key_images.size());
   if (n < 2) throw std::invalid_argument("localize_in_map: map has fewer than 2 key images");
   InitialLocalizationReport report;
-  report.votes = prefilter_votes(matcher.current(), map, options);
   report.counts.assign(static_cast<size_t>(n), -1);
-  std::vector<int> order(static_cast<size_t>(n));
-  std::iota(order.begin(), order.end(), 0);
-  // Highest vote first; ties: lower index (deterministic).
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return report.votes[a] > report.votes[b]; });
   auto verify = [&](int k) {
     if (k < 0 || k >= n || report.counts[k] >= 0) return;
     report.counts[k] = matcher.wide_baseline(k, map.key_images[k].features).total();
     ++report.verified;
   };
-  for (int r = 0; r < std::min(options.top_k, n); ++r) {
-    if (report.votes[order[r]] <= 0 && r > 0) break;  // nothing in common with the rest
-    verify(order[r]);
-  }
+  // The expected key images first: where one of them decides (below), the appearance vote and
+  // its top_k verifications cannot change the outcome, so they are not computed (the costliest
+  // part of a localisation: the vote over the whole map and up to top_k two-view matches).
   for (const int k : expected) verify(k);
   // The expected key images are a prior (where the replay starts, or where odometry puts the
   // robot after a loss). Where one of them has enough verified matches on its own, the robot is
@@ -148,6 +141,16 @@ InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
     report.result = localize_from_counts(near, prior_rule);
     report.from_prior = true;
     return report;
+  }
+  report.votes = prefilter_votes(matcher.current(), map, options);
+  std::vector<int> order(static_cast<size_t>(n));
+  std::iota(order.begin(), order.end(), 0);
+  // Highest vote first; ties: lower index (deterministic).
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return report.votes[a] > report.votes[b]; });
+  for (int r = 0; r < std::min(options.top_k, n); ++r) {
+    if (report.votes[order[r]] <= 0 && r > 0) break;  // nothing in common with the rest
+    verify(order[r]);
   }
   const int best = static_cast<int>(std::max_element(report.counts.begin(), report.counts.end()) -
                                     report.counts.begin());

@@ -52,6 +52,12 @@ TEST(LocalizationPrior, ExpectedKeyImagesWinOverALookAlikeWithMoreMatches) {
   EXPECT_TRUE(b.from_prior);
   EXPECT_LE(b.result.best, 1) << "counts: best " << b.result.best << " with " << b.result.best_count;
   EXPECT_LT(b.result.best_count, a.result.best_count);
+  // The prior decided, so the appearance vote and its top_k verifications were not needed: only
+  // the expected key images and the best one's neighbours were verified (issue 22: the
+  // localisation step is the costliest frame of a replay).
+  EXPECT_TRUE(b.votes.empty());
+  EXPECT_LE(b.verified, static_cast<int>(start.size()) + 2);
+  EXPECT_EQ(static_cast<int>(a.votes.size()), n);
 
   // A prior the evidence does not support changes nothing: the expected key images below half
   // of min_best_count (the prior's threshold), and whatever the rest of the map says decides.
@@ -60,6 +66,7 @@ TEST(LocalizationPrior, ExpectedKeyImagesWinOverALookAlikeWithMoreMatches) {
   features::FrameMatcher weak_prior(extractor.extract(view, features::kPartsAll));
   const InitialLocalizationReport c = localize_in_map(weak_prior, map, strict, start);
   EXPECT_FALSE(c.from_prior);
+  EXPECT_EQ(static_cast<int>(c.votes.size()), n) << "an unsupported prior: the vote decides";
   EXPECT_EQ(c.result.segment.has_value(), a.result.best_count >= strict.rule.min_best_count);
 
   // Half the evidence suffices with the prior: a count the whole-map rule refuses localises at

@@ -42,7 +42,9 @@ struct InitialLocalizerOptions {
 
 struct InitialLocalizationReport {
   InitialLocalizationResult result;  ///< the rule's outcome (segment or not localised)
-  std::vector<int> votes;            ///< prefilter vote per key image
+  /// Prefilter vote per key image; empty when the expected key images decided (from_prior):
+  /// the vote is then not computed.
+  std::vector<int> votes;
   std::vector<int> counts;           ///< verified n(Ia, Ik), -1 when not verified
   int verified = 0;                  ///< key images verified geometrically
   bool from_prior = false;           ///< decided among the expected key images (see below)
@@ -54,7 +56,8 @@ struct InitialLocalizationReport {
 /// images when the replay starts, where odometry along the taught path puts the robot after a
 /// loss; indices outside the map are ignored). They are a prior: when one of them reaches the
 /// rule's min_best_count, the decision is made among them and their neighbours, whatever
-/// count a look-alike key image elsewhere reached.
+/// count a look-alike key image elsewhere reached; they are verified first, and the vote and
+/// its top_k verifications run only when none of them decides (same outcome, less work).
 InitialLocalizationReport localize_in_map(features::FrameMatcher& matcher,
                                           const memory::VisualMemory& map,
                                           const InitialLocalizerOptions& options = {},
