@@ -467,14 +467,19 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
     ever_localised_ = true;
     switcher_.emplace(*report.result.segment, static_cast<int>(map_.key_images.size()),
                       options_.switching);
-    // The robot is near the best key image. An odometry estimate carried from before (a loss)
-    // is kept where it agrees; otherwise it starts at that image's taught pose.
+    // The robot is between IP and IN of the segment found. An odometry estimate carried from
+    // before (a loss) is kept where it agrees; otherwise it starts at IP's taught pose, behind
+    // the robot rather than ahead of it: an estimate behind is caught up by the next key-image
+    // switch (the tracker advances with it), while one ahead fires "passed IN by travel" and
+    // the taught turns before the robot is there. Measured (docs/evaluation.md, session 34):
+    // placed at the best key image (often IN), gen_room_7's start estimate was 0.63 m ahead, and
+    // the replay turned its first spot turn that early and diverged.
     if (odom_ && tracker_.usable() && report.result.best >= 0) {
-      const OdometryPose& best = tracker_.taught(report.result.best);
+      const OdometryPose& placed = tracker_.taught(report.result.segment->prev);
       const auto& X = tracker_.estimate();
       constexpr double kAgreeM = 1.0;
-      if (!X || std::hypot(X->x_m - best.x_m, X->y_m - best.y_m) > kAgreeM) {
-        tracker_.set(best, *odom_, report.result.segment->prev);
+      if (!X || std::hypot(X->x_m - placed.x_m, X->y_m - placed.y_m) > kAgreeM) {
+        tracker_.set(placed, *odom_, report.result.segment->prev);
         errors_.place({kPlacedPositionSigmaM, kPlacedPositionSigmaM, kPlacedHeadingSigmaRad});
       } else {
         tracker_.set(*X, *odom_, report.result.segment->prev);

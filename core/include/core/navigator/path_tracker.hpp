@@ -14,7 +14,7 @@
 // the replay's odometry: X <- X (+) (O_prev^-1 (+) O_now), which needs no alignment of the two
 // runs' odometry frames, only the replay odometry's short-term accuracy. Vision sets it where it
 // can (a located VNHV fix: IN's taught pose (+) the robot's pose in IN's frame; or, after a
-// (re)localisation, the best key image's taught pose) and odometry carries it where it cannot.
+// (re)localisation, IP's taught pose) and odometry carries it where it cannot.
 //
 // Progress is a key-image coordinate u = i + f on piece i (f in [0, 1]: the projection along a
 // straight piece, or the fraction of the heading change done on a turn on the spot); "IN
