@@ -474,7 +474,7 @@ bool Navigator::localize(features::FrameMatcher& fm, Telemetry& tel) {
     // the taught turns before the robot is there. Measured (docs/evaluation.md, session 34):
     // placed at the best key image (often IN), gen_room_7's start estimate was 0.63 m ahead, and
     // the replay turned its first spot turn that early and diverged.
-    if (odom_ && tracker_.usable() && report.result.best >= 0) {
+    if (odom_ && tracker_.usable()) {
       const OdometryPose& placed = tracker_.taught(report.result.segment->prev);
       const auto& X = tracker_.estimate();
       constexpr double kAgreeM = 1.0;
