@@ -7,10 +7,12 @@ namespace pepper::core::navigator {
 
 EstimateErrors::EstimateErrors(const FixErrorMixtureOptions& vnhv,
                                const FixErrorMixtureOptions& line_yaw,
-                               const FixErrorMixtureOptions& floor_lines) {
+                               const FixErrorMixtureOptions& floor_lines,
+                               const FixErrorMixtureOptions& switches) {
   sources_[0].options = vnhv;
   sources_[1].options = line_yaw;
   sources_[2].options = floor_lines;
+  sources_[3].options = switches;
   for (int a = 0; a < 3; ++a) {
     if (!vnhv.models(a)) {
       throw std::invalid_argument("EstimateErrors: the VNHV fixes measure all three axes");
@@ -33,6 +35,7 @@ void EstimateErrors::place(const Axes3& sigma) {
   }
   sigma_ = sigma;
   begin();
+  source(FixSource::kSwitch).in = kNotBegun;
 }
 
 void EstimateErrors::begin() {
@@ -62,6 +65,13 @@ const FixErrorMixture& EstimateErrors::model_for(FixSource which, int in) {
   Source& s = source(which);
   if (which == FixSource::kVnhv) return s.mixture;
   if (in < 0) throw std::invalid_argument("EstimateErrors: IN must be >= 0");
+  if (which == FixSource::kSwitch) {  // one model from a placement on: the switches' shared error
+    if (s.in == kNotBegun) {
+      s.mixture.begin(s.options, variances());
+      s.in = kAnyIn;
+    }
+    return s.mixture;
+  }
   if (s.in != in) {
     s.mixture.begin(s.options, variances());
     s.in = in;

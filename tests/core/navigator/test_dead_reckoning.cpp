@@ -38,10 +38,11 @@ struct ClosedLoopRun {
 // odometry (another origin and heading) reads 2 % too much distance and 4 % too much turn.
 // Frames are blank while `blind(travelled_m)` holds.
 template <class Blind>
-ClosedLoopRun closed_loop(const NavigatorOptions& o, Blind blind, int max_frames = 260) {
+ClosedLoopRun closed_loop(const NavigatorOptions& o, Blind blind, int max_frames = 260,
+                          std::optional<sim::Pose2D> start = std::nullopt) {
   Navigator nav(map_with_odometry(), o);
   ClosedLoopRun run;
-  sim::Pose2D pose = tour().path.front();
+  sim::Pose2D pose = start.value_or(tour().path.front());
   OdometryPose odom{10.0, -4.0, 1.0};
   double travelled_m = 0.0;
   constexpr int64_t kDtNs = 200'000'000;
@@ -221,6 +222,52 @@ TEST(DeadReckoning, ALocalisationStartsTheEstimateAtThePreviousKeyImage) {
   EXPECT_GE(localised, 2);
   // Where the best key image is IN, placing the estimate there (as before) would fail the check.
   EXPECT_GE(best_was_in, 1) << "no start where the best key image was IN: the test cannot tell";
+}
+
+// A start 0.25 m behind the first key image: the localisation places the estimate at IP, ahead
+// of the robot, and nothing but the image can say so until a VNHV fix. The first switch that the
+// image decides after the placement is a measurement along the path (the robot is at the IN it
+// left): after it the estimate is within 0.1 m of the truth along the path; without it, it
+// stayed 0.28 m ahead, and every "passed IN by travel" came that early (gen_corridor_8 run 1 at
+// VGA: 0.23 m ahead for 36 s, a taught right turn driven 0.23 m early, 25 cm off the path;
+// docs/method/navigator.md "The first switch after a placement").
+TEST(DeadReckoning, ASwitchTheImageDecidedCorrectsTheEstimateAlongThePath) {
+  sim::Pose2D start = tour().path.front();
+  start.x_m -= 0.25 * std::cos(start.yaw_rad);
+  start.y_m -= 0.25 * std::sin(start.yaw_rad);
+  // IBVS alone: no VNHV fix corrects the estimate (as on a view whose segments reconstruct none).
+  NavigatorOptions o;
+  o.controller = ControllerKind::kIbvs;
+  const ClosedLoopRun run = closed_loop(o, [](double) { return false; }, 120, start);
+  const memory::VisualMemory map = map_with_odometry();
+  constexpr int kPaperRules = 3, kByTravel = 16 | 32;  // localization::kCriterion* bits
+  bool checked = false;
+  for (size_t i = 0; i + 1 < run.steps.size() && !checked; ++i) {
+    const Telemetry& t = run.steps[i].telemetry;
+    if (!t.switched || !(t.switch_criterion & kPaperRules) || (t.switch_criterion & kByTravel))
+      continue;
+    checked = true;
+    // The next frame's estimate and truth, along the new IN's taught heading.
+    const Telemetry& next = run.steps[i + 1].telemetry;
+    ASSERT_TRUE(std::isfinite(next.odom_past_next_m));
+    ASSERT_GE(next.in, 0);
+    const memory::KeyImage& in = map.key_images[static_cast<size_t>(next.in)];
+    const sim::Pose2D& taught = tour().path.at(static_cast<size_t>(in.source_frame_index));
+    const sim::Pose2D& at = run.truth[i + 1];
+    const double true_past_m = std::cos(taught.yaw_rad) * (at.x_m - taught.x_m) +
+                               std::sin(taught.yaw_rad) * (at.y_m - taught.y_m);
+    EXPECT_LT(t.switch_along_correction_m, -0.1) << "the estimate was ahead: it moves back";
+    EXPECT_NEAR(next.odom_past_next_m, true_past_m, 0.1) << "frame " << i + 1;
+  }
+  EXPECT_TRUE(checked) << "no switch decided by the image: the test cannot tell";
+  // Only the first after the placement: later ones are no better than the estimate.
+  int corrections = 0, localisations = 0;
+  for (const StepResult& r : run.steps) {
+    corrections += std::isfinite(r.telemetry.switch_along_correction_m);
+    localisations += r.telemetry.localization_ran && r.telemetry.ip >= 0;
+  }
+  EXPECT_EQ(localisations, 1);
+  EXPECT_EQ(corrections, 1);
 }
 
 TEST(DeadReckoning, WithoutOdometryTheHoldRulesStay) {

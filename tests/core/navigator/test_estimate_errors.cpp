@@ -21,9 +21,12 @@ FixErrorMixtureOptions line_yaw() {
 FixErrorMixtureOptions floor_lines() {
   return {{kNaN, 0.04, kNaN}, {kNaN, 0.3, kNaN}, {kNaN, 0.01, kNaN}, 0.1};
 }
+FixErrorMixtureOptions switches() {
+  return {{0.05, kNaN, kNaN}, {0.4, kNaN, kNaN}, {0.05, kNaN, kNaN}, 0.2};
+}
 
 TEST(EstimateErrors, AnUpdateSetsItsAxesSigmasAndScalesTheOtherModels) {
-  EstimateErrors e(vnhv(), line_yaw(), floor_lines());
+  EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
   e.place({0.2, 0.1, 0.05});
   EXPECT_TRUE(e.begun(FixSource::kVnhv));
   EXPECT_FALSE(e.begun(FixSource::kLineYaw));
@@ -66,7 +69,7 @@ TEST(EstimateErrors, AnUpdateSetsItsAxesSigmasAndScalesTheOtherModels) {
 }
 
 TEST(EstimateErrors, OdometryGrowsTheSigmasAndEveryBegunModel) {
-  EstimateErrors e(vnhv(), line_yaw(), floor_lines());
+  EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
   e.place({0.1, 0.1, 0.02});
   e.model_for(FixSource::kLineYaw, 2);
   e.grow({0.01, 0.02, 0.003});
@@ -81,7 +84,7 @@ TEST(EstimateErrors, OdometryGrowsTheSigmasAndEveryBegunModel) {
 }
 
 TEST(EstimateErrors, ALinesModelBeginsAgainForANewInAndAfterBegin) {
-  EstimateErrors e(vnhv(), line_yaw(), floor_lines());
+  EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
   e.place({0.1, 0.1, 0.02});
   e.model_for(FixSource::kLineYaw, 3);
   for (int i = 0; i < 20; ++i) e.update(FixSource::kLineYaw, {kNaN, kNaN, 0.12}, 1.0);
@@ -98,13 +101,51 @@ TEST(EstimateErrors, ALinesModelBeginsAgainForANewInAndAfterBegin) {
 }
 
 TEST(EstimateErrors, BadSourcesAndSigmasAreRefused) {
-  EXPECT_THROW(EstimateErrors(line_yaw(), line_yaw(), floor_lines()), std::invalid_argument);
+  EXPECT_THROW(EstimateErrors(line_yaw(), line_yaw(), floor_lines(), switches()),
+               std::invalid_argument);
   FixErrorMixtureOptions bad = floor_lines();
   bad.noise_sigma[1] = 0.0;
-  EXPECT_THROW(EstimateErrors(vnhv(), line_yaw(), bad), std::invalid_argument);
-  EstimateErrors e(vnhv(), line_yaw(), floor_lines());
+  EXPECT_THROW(EstimateErrors(vnhv(), line_yaw(), bad, switches()), std::invalid_argument);
+  EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
   EXPECT_THROW(e.place({0.1, 0.0, 0.1}), std::invalid_argument);
   EXPECT_THROW(e.model_for(FixSource::kFloorLines, -1), std::invalid_argument);
+}
+
+// A switch the image decided measures the along axis once: a freshly placed estimate (sigma 0.5 m)
+// takes most of it, a located one (sigma 3 cm) hardly moves for a look-alike's early switch.
+TEST(EstimateErrors, ASwitchMeasuresAlongOnlyAndWeighsAgainstTheEstimatesSigma) {
+  EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
+  e.place({0.5, 0.5, 0.1});
+  EXPECT_FALSE(e.begun(FixSource::kSwitch));
+  e.model_for(FixSource::kSwitch, 7);
+  const Axes3 d = e.update(FixSource::kSwitch, {-0.25, kNaN, kNaN}, 1.0);
+  EXPECT_LT(d[0], -0.2);
+  EXPECT_GT(d[0], -0.25);
+  EXPECT_EQ(d[1], 0.0);
+  EXPECT_EQ(d[2], 0.0);
+  EXPECT_LT(e.sigma()[0], 0.2);
+  EXPECT_DOUBLE_EQ(e.sigma()[1], 0.5);
+
+  // The switches share one error: a run of switches 4 cm early pulls the estimate by less than
+  // that error's sigma (5 cm) in all, not by 4 cm each time. begin() (a new VNHV model at every
+  // switch) keeps the model; a placement ends it.
+  e.place({0.03, 0.02, 0.01});
+  double pulled_m = 0.0;
+  for (int i = 0; i < 30; ++i) {
+    e.begin();
+    e.model_for(FixSource::kSwitch, 8 + i);
+    EXPECT_TRUE(e.begun(FixSource::kSwitch));
+    pulled_m += e.update(FixSource::kSwitch, {0.04 - pulled_m, kNaN, kNaN}, 1.0)[0];
+  }
+  EXPECT_GT(pulled_m, 0.0);
+  EXPECT_LT(pulled_m, 0.03);
+  e.place({0.03, 0.02, 0.01});
+  EXPECT_FALSE(e.begun(FixSource::kSwitch));
+  e.model_for(FixSource::kSwitch, 40);
+  const Axes3 early = e.update(FixSource::kSwitch, {0.3, kNaN, kNaN}, 1.0);
+  EXPECT_GT(early[0], 0.0);
+  EXPECT_LT(early[0], 0.03);
+  EXPECT_LT(e.model(FixSource::kSwitch).usual_probability(), 0.5) << "a look-alike's switch";
 }
 
 }  // namespace

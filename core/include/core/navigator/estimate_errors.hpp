@@ -3,8 +3,9 @@
 // correct it (docs/method/navigator.md "Fixes from the room or from a moved object"): one owner,
 // so that the sigmas and every source's model of the same axes stay in step.
 //
-// Sources: the VNHV fixes (all three axes), the heading from lines (heading only) and the floor
-// lines' lateral position (across only). Each source's measurements of a segment share an error
+// Sources: the VNHV fixes (all three axes), the heading from lines (heading only), the floor
+// lines' lateral position (across only) and a key-image switch decided by the image (along
+// only: the robot is at IN's taught pose). Each source's measurements of a segment share an error
 // that is the room's (small) or a moved object's (large): a FixErrorMixture per source. The VNHV
 // fixes' model begins with begin() (a new VNHV model, a placement); a lines' model begins at its
 // first measurement against an IN other than the one it was begun for, and again after begin().
@@ -25,17 +26,17 @@
 
 namespace pepper::core::navigator {
 
-enum class FixSource { kVnhv = 0, kLineYaw = 1, kFloorLines = 2 };
+enum class FixSource { kVnhv = 0, kLineYaw = 1, kFloorLines = 2, kSwitch = 3 };
 
 class EstimateErrors {
  public:
   /// The sources' models: per-axis sigmas of each, all > 0 on the axes it measures and NaN on
   /// the others (the VNHV fixes measure all three). Throws std::invalid_argument otherwise.
   EstimateErrors(const FixErrorMixtureOptions& vnhv, const FixErrorMixtureOptions& line_yaw,
-                 const FixErrorMixtureOptions& floor_lines);
+                 const FixErrorMixtureOptions& floor_lines, const FixErrorMixtureOptions& switches);
 
   /// A placed estimate: the sigmas become `sigma` (each > 0) and every model begins again
-  /// (begin()). Throws std::invalid_argument for a sigma <= 0.
+  /// (begin(); the switches' model at the next switch). Throws std::invalid_argument for a sigma <= 0.
   void place(const Axes3& sigma);
   /// A new segment model of the VNHV fixes, from the sigmas now; the lines' models begin again
   /// at their next measurement.
@@ -46,7 +47,10 @@ class EstimateErrors {
 
   /// Source `s`'s model for measurements against IN `in` (>= 0; ignored for the VNHV fixes,
   /// whose model begin() begins): a lines' model begins from the sigmas now when it was begun
-  /// for another IN or not since begin().
+  /// for another IN or not since begin(). The switches' model (`in` ignored) begins at the first
+  /// switch after a placement and lasts until the next: every switch the rules decide shares
+  /// one error (they fire a few centimetres early, switch after switch), so a run of them
+  /// cannot pull the estimate further than that error's sigma allows.
   const FixErrorMixture& model_for(FixSource s, int in);
   /// Source `s`'s model as it is (a lines' model may not be begun: begun(s)).
   const FixErrorMixture& model(FixSource s) const { return source(s).mixture; }
@@ -72,7 +76,7 @@ class EstimateErrors {
   const Source& source(FixSource s) const { return sources_[static_cast<size_t>(s)]; }
   Axes3 variances() const;
 
-  std::array<Source, 3> sources_;
+  std::array<Source, 4> sources_;
   Axes3 sigma_{0.5, 0.5, 0.1};
 };
 

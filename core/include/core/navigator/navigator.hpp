@@ -265,6 +265,11 @@ class Navigator {
   /// The matched lines on the floor give the robot's position relative to IN across them
   /// (geometry/floor_lines.hpp): a Kalman update of the odometry estimate's position.
   void correct_position_from_floor_lines(const LinePairs& pairs, int in, Telemetry& tel);
+  /// The first switch the image decides after a placement (`criteria_bits`:
+  /// Telemetry::switch_criterion; a paper rule and no "passed IN by travel") measures the
+  /// estimate along the path: the robot is at the IN it left (errors_, FixSource::kSwitch;
+  /// telemetry switch_along_correction_m).
+  void correct_along_from_switch(int criteria_bits, Telemetry& tel);
   /// Whether dead reckoning can drive this frame (StepFacts::can_dead_reckon).
   bool can_dead_reckon() const;
   const features::ImageFeatures& key(int i) const { return map_.key_images[i].features; }

@@ -144,6 +144,10 @@ struct Telemetry {
   /// (navigator/fix_error_mixture.hpp); 0 and NaN otherwise.
   int floor_lines = 0;
   double floor_lateral_before_m = kNaN, floor_lateral_after_m = kNaN;
+  /// How far the first switch the image decided after a placement moved the odometry estimate
+  /// along the robot (m; NaN on the other frames): the robot is at the IN it left
+  /// (Navigator::correct_along_from_switch).
+  double switch_along_correction_m = kNaN;
   double floor_lateral_lines_m = kNaN, floor_lateral_lines_sigma_m = kNaN;
   double floor_room_probability = kNaN;
   /// On the first frame after a blind stretch with a VNHV fix: how far that fix moved the
