@@ -104,8 +104,13 @@ for c in "${SELECTED[@]}"; do
   kind=${g#gen_}
   kind=${kind%_*}
   if [[ ! -s $OUT/worlds/$g.yaml ]]; then
-    "$APP" world generate --seed "$seed" --kind "$kind" --out "$OUT/worlds/$g.yaml" \
+    # Written under a name of this process's own and renamed: two shards side by side need the
+    # same worlds (a world's none and light configurations fall in different shards), and one
+    # must never read the file the other is writing.
+    tmp="$OUT/worlds/.$g.$$.yaml"
+    "$APP" world generate --seed "$seed" --kind "$kind" --out "$tmp" \
         --textures worlds/textures > /dev/null
+    mv -f "$tmp" "$OUT/worlds/$g.yaml"
   fi
 done
 run_one() {
