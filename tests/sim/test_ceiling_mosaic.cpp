@@ -682,6 +682,41 @@ TEST(CeilingMosaicSim, LocalisesWithoutAPriorAlongAndBesideTheTaughtPath) {
   EXPECT_LT(percentile(yaw, 1.0), 2.0 * M_PI / 180.0);
 }
 
+// The fix names the landmarks it used (MosaicFix::inlier_observations, what the replay view
+// draws): as many as its inliers, each one of the frame's, each placed by the fix within the
+// RANSAC's reach of a mosaic landmark, and each drawn inside the camera image.
+TEST(CeilingMosaicSim, AFixNamesTheLandmarksItUsed) {
+  Taught& t = taught();
+  const MosaicLocaliser loc(t.mosaic);
+  int checked = 0;
+  for (size_t k = 0; k < t.tour.truth.size(); k += 60) {
+    t.robot->place(t.tour.truth[k]);
+    const Frame frame = t.robot->capture(kWidthPx, kHeightPx);
+    const CeilingObservation obs = observe_image(t.rig, frame.gray);
+    const MosaicFix fix = loc.localise(obs);
+    if (!fix.found) continue;
+    ++checked;
+    ASSERT_EQ(static_cast<int>(fix.inlier_observations.size()), fix.inliers) << "frame " << k;
+    for (const int i : fix.inlier_observations) {
+      ASSERT_GE(i, 0);
+      ASSERT_LT(static_cast<size_t>(i), obs.size());
+      const cv::Point2d p = fix.T_mosaic_base.apply(obs.p_base_m[static_cast<size_t>(i)]);
+      double nearest_m = 1e9;
+      for (const MosaicLandmark& l : t.mosaic.landmarks) {
+        nearest_m = std::min(nearest_m, std::hypot(l.position_m.x - p.x, l.position_m.y - p.y));
+      }
+      EXPECT_LT(nearest_m, 0.05) << "frame " << k << ", landmark " << i;
+      const auto px = t.rig.view->to_image(cv::Point2d(obs.p_canon_px[static_cast<size_t>(i)]));
+      ASSERT_TRUE(px.has_value());
+      EXPECT_GE(px->x, -0.5);
+      EXPECT_GE(px->y, -0.5);
+      EXPECT_LE(px->x, kWidthPx - 0.5);
+      EXPECT_LE(px->y, kHeightPx - 0.5);
+    }
+  }
+  EXPECT_GE(checked, 5);
+}
+
 TEST(CeilingMosaicSim, APersonInFrontOfTheCameraDoesNotPreventTheFix) {
   Taught& t = taught();
   const MosaicLocaliser loc(t.mosaic);

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/control/planar_pose.hpp"
+#include "core/features/feature_overlay.hpp"
 
 namespace pepper::core::ceiling {
 
@@ -90,6 +91,14 @@ CeilingStepResult CeilingNavigator::step(const Frame& frame) {
   const double perceive_ms = ms_since(t0);
   CeilingStepResult r = step_observation(obs, frame.t_ns, frame.odom);
   r.ceiling.perceive_ms = perceive_ms;
+  features::FeatureOverlay& overlay = r.step.telemetry.overlay;
+  overlay.key_index = r.step.telemetry.in;
+  for (const int i : r.ceiling.inlier_observations) {
+    if (overlay.points_px.size() >= features::FeatureOverlay::kMaxPoints) break;
+    if (const auto p = view_->to_image(cv::Point2d(obs.p_canon_px[static_cast<size_t>(i)]))) {
+      overlay.points_px.emplace_back(static_cast<float>(p->x), static_cast<float>(p->y));
+    }
+  }
   r.step.telemetry.frame_index = frame.index;
   r.step.telemetry.timings.extract_ms = perceive_ms;
   r.step.telemetry.timings.total_ms = ms_since(t0);
@@ -250,6 +259,7 @@ CeilingStepResult CeilingNavigator::step_observation(const CeilingObservation& o
   ct.fix = fix.found;
   ct.matches = fix.matches;
   ct.inliers = fix.inliers;
+  if (fix.found) ct.inlier_observations = fix.inlier_observations;
   tel.n_points_next = fix.inliers;
   tel.localization_best_count = fix.inliers;
 

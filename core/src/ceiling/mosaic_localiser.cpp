@@ -134,6 +134,7 @@ MosaicFix MosaicLocaliser::localise(const CeilingObservation& obs,
   pairs(src, dst);
   RigidFit fit = ransac_rigid(src, dst, options_.ransac);
   if (!fit.found) return fix;
+  std::vector<size_t> fit_oi = oi;  // the pairs `fit` was made from
   // Guided re-matching around the robust pose: landmarks whose first nearest descriptor was
   // elsewhere (repeated texture) are found near their predicted place.
   for (int round = 0; round < 2; ++round) {
@@ -150,8 +151,12 @@ MosaicFix MosaicLocaliser::localise(const CeilingObservation& obs,
     const RigidFit refined = ransac_rigid(src, dst, refine);
     if (!refined.found || refined.inliers < fit.inliers) break;
     fit = refined;
+    fit_oi = oi;
   }
   fix.inliers = fit.inliers;
+  for (size_t p = 0; p < fit.inlier.size() && p < fit_oi.size(); ++p) {
+    if (fit.inlier[p]) fix.inlier_observations.push_back(static_cast<int>(fit_oi[p]));
+  }
   fix.rms_m = fit.rms_m;
   // Checked after the guided re-matching, which finds the landmarks the first nearest-descriptor
   // step missed: a view that overlaps the mosaic only in part has a low first-step ratio.

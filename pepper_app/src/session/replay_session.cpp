@@ -463,11 +463,21 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         // (the end of the tour, a search) the caption says so, or the legend's 0 would
         // contradict it.
         const bool drawn = !t.overlay.lines.empty() || !t.overlay.points_px.empty();
-        overlay["text"] = nlohmann::json::array(
-            {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
-                 std::to_string(t.in),
-             "matches with IN: lines " + std::to_string(t.n_lines_next) + ", points " +
-                 std::to_string(t.n_points_next) + (drawn ? "" : " (none drawn)")});
+        if (options.ceiling_telemetry) {
+          // Ceiling mode: the points are the ceiling landmarks the mosaic localiser kept, and the
+          // second line says where the robot is in the mosaic (or that it coasts on odometry).
+          overlay = overlay_to_json(t.overlay, "ceiling landmarks");
+          overlay["text"] = nlohmann::json::array(
+              {std::string(nav::to_string(t.state)) + "  relay IP " + std::to_string(t.ip) +
+                   "  IN " + std::to_string(t.in),
+               ceiling_overlay_caption(options.ceiling_telemetry())});
+        } else {
+          overlay["text"] = nlohmann::json::array(
+              {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
+                   std::to_string(t.in),
+               "matches with IN: lines " + std::to_string(t.n_lines_next) + ", points " +
+                   std::to_string(t.n_points_next) + (drawn ? "" : " (none drawn)")});
+        }
         link.publish_frame(*frame, overlay);
         link.publish_samples({{"t_s", s.t_s},
                               {"v_m_s", s.v_m_s},

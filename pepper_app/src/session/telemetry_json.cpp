@@ -1,6 +1,7 @@
 #include "session/telemetry_json.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 namespace pepper::app {
 namespace {
@@ -138,6 +139,28 @@ nlohmann::json overlay_to_json(const core::features::FeatureOverlay& o, const st
                            {"uv", std::move(uv)}};
   return {{"lines", nlohmann::json::array({std::move(lines)})},
           {"points", nlohmann::json::array({std::move(points)})}};
+}
+
+std::string ceiling_overlay_caption(const nlohmann::json& c) {
+  char buf[160];
+  const int inliers = c.value("inliers", 0), matches = c.value("matches", 0);
+  const auto& pose = c.contains("T_mosaic_base") ? c["T_mosaic_base"] : nlohmann::json();
+  if (!pose.is_object()) {
+    std::snprintf(buf, sizeof buf, "ceiling: %d of %d landmarks, no pose in the mosaic", inliers,
+                  matches);
+    return buf;
+  }
+  const double x = pose.value("x_m", 0.0), y = pose.value("y_m", 0.0);
+  const double deg = pose.value("theta_rad", 0.0) * 180.0 / M_PI;
+  if (c.value("fix", false)) {
+    std::snprintf(buf, sizeof buf, "ceiling: %d of %d landmarks, mosaic x %.2f y %.2f m, %.0f deg",
+                  inliers, matches, x, y, deg);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "ceiling: coasting on odometry %.2f m, mosaic x %.2f y %.2f m, %.0f deg",
+                  c.value("coasted_m", 0.0), x, y, deg);
+  }
+  return buf;
 }
 
 }  // namespace pepper::app

@@ -26,4 +26,10 @@ nlohmann::json odometry_to_json(const std::optional<core::OdometryPose>& odom);
 nlohmann::json overlay_to_json(const core::features::FeatureOverlay& overlay,
                                const std::string& what);
 
+/// The replay view's second caption line in ceiling mode, from one step's ceiling telemetry
+/// (ceiling_telemetry_to_json): the localiser's inliers of its matches and the pose in the
+/// mosaic (x, y in metres, heading in degrees), "coasting on odometry" with the distance when
+/// the pose is not this frame's fix, "no pose in the mosaic" when none is known.
+std::string ceiling_overlay_caption(const nlohmann::json& ceiling);
+
 }  // namespace pepper::app

@@ -3,6 +3,7 @@
 // taught path kept next to a map taught on the mock robot (top view of a later replay).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -40,6 +41,23 @@ TEST(OverlayJson, RoundsPixelsAndLabelsTheGroups) {
   const nlohmann::json empty = overlay_to_json({}, "matched");
   EXPECT_TRUE(empty.at("lines")[0].at("segments").empty());
   EXPECT_TRUE(empty.at("points")[0].at("uv").empty());
+}
+
+// Ceiling mode's caption: the landmarks kept of those matched and the pose in the mosaic; when
+// coasting, the odometry distance; before any pose, says so.
+TEST(OverlayJson, TheCeilingCaptionSaysWhereTheRobotIsInTheMosaic) {
+  nlohmann::json c = {{"fix", true},        {"matches", 80},   {"inliers", 61},
+                      {"pose_known", true}, {"coasted_m", 0.0},
+                      {"T_mosaic_base", {{"x_m", 1.234}, {"y_m", -0.5}, {"theta_rad", M_PI / 2}}}};
+  EXPECT_EQ(ceiling_overlay_caption(c),
+            "ceiling: 61 of 80 landmarks, mosaic x 1.23 y -0.50 m, 90 deg");
+  c["fix"] = false;
+  c["coasted_m"] = 0.31;
+  EXPECT_EQ(ceiling_overlay_caption(c),
+            "ceiling: coasting on odometry 0.31 m, mosaic x 1.23 y -0.50 m, 90 deg");
+  c["T_mosaic_base"] = nullptr;
+  c["inliers"] = 3;
+  EXPECT_EQ(ceiling_overlay_caption(c), "ceiling: 3 of 80 landmarks, no pose in the mosaic");
 }
 
 TEST(TaughtPathFile, RoundTripsAndIsOptional) {

@@ -97,12 +97,16 @@ struct CeilingTelemetry {
   double coasted_m = 0.0;      ///< odometry distance since the last fix
   double coast_error_m = 0.0;  ///< the odometry's possible position error since the last fix
   double perceive_ms = 0.0, localise_ms = 0.0;  ///< wall clock, telemetry only
+  /// The localiser's inlier landmarks (MosaicFix::inlier_observations) when it found the pose.
+  std::vector<int> inlier_observations;
 };
 
 struct CeilingStepResult {
   /// The command, and the forward Telemetry's fields where they mean the same: ip / in / inn are
   /// relay indices, n_points_next the localiser's inliers, vnhv_* the deviation from the
-  /// segment, dead_reckoned_m the coasted distance (docs/method/ceiling.md "Replay").
+  /// segment, dead_reckoned_m the coasted distance (docs/method/ceiling.md "Replay"); step()
+  /// also draws the inlier landmarks in the camera image (overlay.points_px, undistorted pixels,
+  /// key_index the IN relay).
   navigator::StepResult step;
   CeilingTelemetry ceiling;
 };

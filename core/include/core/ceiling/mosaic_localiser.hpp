@@ -48,6 +48,9 @@ struct MosaicFix {
   int matches = 0;  ///< descriptor matches of the first step
   int inliers = 0;  ///< after refinement
   double rms_m = 0.0;
+  /// The observation's landmarks the fit's inliers came from (indices into the observation;
+  /// also where the fit was refused, empty when none was found): what a display draws.
+  std::vector<int> inlier_observations;
 };
 
 class MosaicLocaliser {
