@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "core/control/planar_pose.hpp"
 #include "core/features/feature_overlay.hpp"
@@ -259,7 +260,7 @@ CeilingStepResult CeilingNavigator::step_observation(const CeilingObservation& o
   ct.fix = fix.found;
   ct.matches = fix.matches;
   ct.inliers = fix.inliers;
-  if (fix.found) ct.inlier_observations = fix.inlier_observations;
+  if (fix.found) ct.inlier_observations = std::move(fix.inlier_observations);
   tel.n_points_next = fix.inliers;
   tel.localization_best_count = fix.inliers;
 

@@ -453,10 +453,12 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
       if (options.monitor) monitor_end = options.monitor->after_iteration(&step, &s);
 
       if (link.has_ui()) {
+        // Ceiling mode: the points are the ceiling landmarks the mosaic localiser kept.
         nlohmann::json overlay = overlay_to_json(
-            t.overlay, t.overlay.key_index < 0
-                           ? std::string("matched")
-                           : "IN " + std::to_string(t.overlay.key_index) + " matched");
+            t.overlay, options.ceiling_telemetry   ? std::string("ceiling landmarks")
+                       : t.overlay.key_index < 0 ? std::string("matched")
+                                                 : "IN " + std::to_string(t.overlay.key_index) +
+                                                       " matched");
         // The caption's counts are the navigator's matches with IN before verification; the
         // legend counts the verified ones drawn: say which is which. Two lines, so that a
         // 320-pixel-wide image shows the counts whole. On frames where the navigator drew none
@@ -464,9 +466,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         // contradict it.
         const bool drawn = !t.overlay.lines.empty() || !t.overlay.points_px.empty();
         if (options.ceiling_telemetry) {
-          // Ceiling mode: the points are the ceiling landmarks the mosaic localiser kept, and the
-          // second line says where the robot is in the mosaic (or that it coasts on odometry).
-          overlay = overlay_to_json(t.overlay, "ceiling landmarks");
+          // The second line says where the robot is in the mosaic (or that it coasts).
           overlay["text"] = nlohmann::json::array(
               {std::string(nav::to_string(t.state)) + "  relay IP " + std::to_string(t.ip) +
                    "  IN " + std::to_string(t.in),

@@ -36,7 +36,8 @@ class EstimateErrors {
                  const FixErrorMixtureOptions& floor_lines, const FixErrorMixtureOptions& switches);
 
   /// A placed estimate: the sigmas become `sigma` (each > 0) and every model begins again
-  /// (begin(); the switches' model at the next switch). Throws std::invalid_argument for a sigma <= 0.
+  /// (begin(); the switches' model at the next switch). Throws std::invalid_argument for a
+  /// sigma <= 0.
   void place(const Axes3& sigma);
   /// A new segment model of the VNHV fixes, from the sigmas now; the lines' models begin again
   /// at their next measurement.
