@@ -268,6 +268,18 @@ cc::MosaicFrameResult CeilingTeacher::add_frame(const core::Frame& frame, double
   return r;
 }
 
+core::features::FeatureOverlay CeilingTeacher::overlay(
+    const cc::MosaicFrameResult& result) const {
+  core::features::FeatureOverlay o;
+  for (const cc::LandmarkSighting& s : result.sightings) {
+    if (o.points_px.size() >= core::features::FeatureOverlay::kMaxPoints) break;
+    if (const auto p = view_->to_image(s.p_canon_px)) {
+      o.points_px.emplace_back(static_cast<float>(p->x), static_cast<float>(p->y));
+    }
+  }
+  return o;
+}
+
 CeilingMap CeilingTeacher::finish(const std::string& parameters_json) const {
   if (frames_.size() < 2) {
     throw std::runtime_error("ceiling teach: " + std::to_string(frames_.size()) +

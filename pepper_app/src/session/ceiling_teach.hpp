@@ -39,6 +39,7 @@
 #include "core/ceiling/mosaic.hpp"
 #include "core/ceiling/mosaic_builder.hpp"
 #include "core/ceiling/relay_images.hpp"
+#include "core/features/feature_overlay.hpp"
 #include "core/features/image_features.hpp"
 #include "core/frame.hpp"
 #include "core/memory/visual_memory.hpp"
@@ -155,6 +156,12 @@ class CeilingTeacher {
   /// fails (std::runtime_error naming the file) the teacher is as it was before the call.
   core::ceiling::MosaicFrameResult add_frame(
       const core::Frame& frame, double travelled_m = std::numeric_limits<double>::quiet_NaN());
+
+  /// The teach view's overlay of one add_frame() result: its landmarks (the builder's inliers
+  /// and the candidates it added, MosaicFrameResult::sightings) drawn back from the canonical
+  /// view into the camera image, at most FeatureOverlay::kMaxPoints, those whose ceiling point
+  /// is behind the image plane left out. No lines; key_index -1.
+  core::features::FeatureOverlay overlay(const core::ceiling::MosaicFrameResult& result) const;
 
   int64_t frames_seen() const { return static_cast<int64_t>(frames_.size()); }
   /// RAM the teacher's own per-frame records take (their vector's capacity): a frame's stamp,

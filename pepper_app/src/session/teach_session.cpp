@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "core/ceiling/ceiling_tour.hpp"
+#include "core/features/feature_overlay.hpp"
 #include "core/mapping/drive_odometer.hpp"
 #include "core/memory/visual_memory.hpp"
 #include "session/ceiling_map.hpp"
@@ -341,9 +342,12 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
                               {"v_m_s", sent.v_x_m_s},
                               {"omega_rad_s", sent.omega_rad_s}};
       };
+      // Ceiling mode: this frame's landmarks for the teach view (none when not recording).
+      std::optional<core::features::FeatureOverlay> ceiling_overlay;
       if (recording && ceiling_teacher) {
         const core::ceiling::MosaicFrameResult step =
             ceiling_teacher->add_frame(*frame, travelled_m);
+        if (link.has_ui()) ceiling_overlay = ceiling_teacher->overlay(step);
         if (pos) {
           result.path_m.push_back(*pos);
           result.path_yaw_rad.push_back(yaw_rad);
@@ -472,6 +476,8 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       if (recording && teacher && link.has_ui()) {  // the teacher has just extracted them
         overlay = overlay_to_json(
             core::features::detected_overlay(teacher->last_frame_features()), "detected");
+      } else if (ceiling_overlay) {
+        overlay = overlay_to_json(*ceiling_overlay, "ceiling landmarks");
       }
       overlay["text"] = nlohmann::json::array(
           {std::string(recording ? "REC " : "") + "frame " + std::to_string(frame->index) +

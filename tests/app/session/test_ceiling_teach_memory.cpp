@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -410,6 +411,39 @@ TEST(CeilingTeachMemory, FrameStoreGivesThePixelsBackAndItsCostAtVga) {
     EXPECT_TRUE(same_mat(store.get(1), frames[1].gray));
   }
   EXPECT_FALSE(fs::exists(dir));
+}
+
+// The teach view's overlay (docs/teach_ui.md "Feature overlay"): every landmark of a frame's
+// result drawn in the camera image where the canonical view says it was seen, inside the image.
+TEST(CeilingTeachOverlay, DrawsTheFramesLandmarksWhereTheCameraSawThem) {
+  const Taught& t = taught();
+  const CeilingTeachOptions options;
+  CeilingTeacher teacher(t.setup, t.camera, core::features::FeatureExtractorOptions{}, options);
+  const cc::CanonicalView view(
+      t.setup.camera, cc::fit_frame(t.setup.camera, options.px_per_m, options.max_forward_m));
+  size_t drawn = 0;
+  for (size_t i = 0; i < 40; ++i) {
+    const cc::MosaicFrameResult r = teacher.add_frame(t.frames[i], t.travelled_m[i]);
+    const core::features::FeatureOverlay o = teacher.overlay(r);
+    EXPECT_TRUE(o.lines.empty());
+    EXPECT_EQ(o.key_index, -1);
+    ASSERT_EQ(o.points_px.size(),
+              std::min(r.sightings.size(), core::features::FeatureOverlay::kMaxPoints))
+        << "frame " << i;
+    for (size_t k = 0; k < o.points_px.size(); ++k) {
+      const cv::Point2f& p = o.points_px[k];
+      EXPECT_GE(p.x, -1.0f);
+      EXPECT_LE(p.x, static_cast<float>(kWidthPx));
+      EXPECT_GE(p.y, -1.0f);
+      EXPECT_LE(p.y, static_cast<float>(kHeightPx));
+      const auto back = view.to_canonical(cv::Point2d(p.x, p.y));
+      ASSERT_TRUE(back.has_value());
+      EXPECT_NEAR(back->x, r.sightings[k].p_canon_px.x, 0.5) << "frame " << i << " point " << k;
+      EXPECT_NEAR(back->y, r.sightings[k].p_canon_px.y, 0.5) << "frame " << i << " point " << k;
+    }
+    drawn += o.points_px.size();
+  }
+  EXPECT_GT(drawn, 40u * 10u) << "a ceiling with texture gives landmarks on every frame";
 }
 
 }  // namespace
