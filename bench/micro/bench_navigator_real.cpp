@@ -423,6 +423,27 @@ BENCHMARK(BM_RealNavigatorStepVgaFivePoint)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(kIterations);
 
+// Every untracked corner tracked from scratch on every frame (features.klt
+// .retry_untracked_frames = 1), the default until session 36: the before of that change
+// (docs/perception.md "Retrying untracked corners").
+core::navigator::NavigatorOptions retry_every_frame_options() {
+  core::navigator::NavigatorOptions o;
+  o.matcher.klt.retry_untracked_frames = 1;
+  return o;
+}
+void BM_RealNavigatorStepQvgaRetryEveryFrame(benchmark::State& state) {
+  step_sequence(state, qvga_sequence(), retry_every_frame_options());
+}
+BENCHMARK(BM_RealNavigatorStepQvgaRetryEveryFrame)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(kIterations);
+void BM_RealNavigatorStepVgaRetryEveryFrame(benchmark::State& state) {
+  step_sequence(state, vga_sequence(), retry_every_frame_options());
+}
+BENCHMARK(BM_RealNavigatorStepVgaRetryEveryFrame)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(kIterations);
+
 }  // namespace
 
 int main(int argc, char** argv) {

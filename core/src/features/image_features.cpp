@@ -133,6 +133,7 @@ std::vector<std::string> KltOptions::validate() const {
   check_range(e, "klt.max_error", max_error, 0.0f, 255.0f);
   check_range(e, "klt.prior_max_level", prior_max_level, -1, 6);
   check_range(e, "klt.prior_probes", prior_probes, 0, 1000);
+  check_range(e, "klt.retry_untracked_frames", retry_untracked_frames, 1, 1000);
   check_range(e, "klt.prior_window_px", prior_window_px, 5, 101);
   if (prior_window_px % 2 == 0)
     e.push_back("klt.prior_window_px = " + std::to_string(prior_window_px) + " must be odd");

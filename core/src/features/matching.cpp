@@ -235,9 +235,10 @@ void run_lk(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
 // all levels (a turn moves the whole image by tens of pixels per frame; what is left after the
 // shift is a few pixels). The corners without prior, and prior tracks that fail, are tracked
 // with k.max_level from their position in a moved by `shift_px` (a guess of the image motion
-// a -> b, or zero).
+// a -> b, or zero), except the corners in `skip` (klt_corners_to_skip), left untracked.
 Tracks klt_track(const ImageFeatures& a, const ImageFeatures& b, const KltOptions& k,
-                 const cv::Point2f& shift_px, std::span<const PointMatch> prior) {
+                 const cv::Point2f& shift_px, std::span<const PointMatch> prior,
+                 std::span<const int> skip) {
   const size_t n = a.corners_px.size();
   Tracks t;
   t.b_px.assign(n, cv::Point2f());
@@ -315,8 +316,12 @@ Tracks klt_track(const ImageFeatures& a, const ImageFeatures& b, const KltOption
   a_sub.clear();
   b_sub.clear();
   const bool shifted = shift_px != cv::Point2f(0.0f, 0.0f);
+  std::vector<uchar> skipped(n, 0);
+  for (const int i : skip) {
+    if (i >= 0 && static_cast<size_t>(i) < n) skipped[static_cast<size_t>(i)] = 1;
+  }
   for (size_t i = 0; i < n; ++i) {
-    if (t.ok[i]) continue;
+    if (t.ok[i] || skipped[i]) continue;
     idx.push_back(static_cast<int>(i));
     a_sub.push_back(a.corners_px[i]);
     if (shifted) b_sub.push_back(a.corners_px[i] + shift_px);
@@ -497,11 +502,11 @@ namespace {
 // KLT of a's corners into b (klt_track) and essential RANSAC, into r.
 void track_and_verify_points(const ImageFeatures& a, const ImageFeatures& b,
                              const MatcherOptions& options, const cv::Point2f& shift_px,
-                             std::span<const PointMatch> prior, TwoViewMatches& r,
-                             MatchTimings* timings) {
+                             std::span<const PointMatch> prior, std::span<const int> skip,
+                             TwoViewMatches& r, MatchTimings* timings) {
   const Tracks t = [&] {
     const ScopedMs ms(field(timings, &MatchTimings::klt_ms));
-    return klt_track(a, b, options.klt, shift_px, prior);
+    return klt_track(a, b, options.klt, shift_px, prior, skip);
   }();
   std::vector<PointMatch> cands;
   std::vector<float> cost;  // KLT patch error
@@ -518,15 +523,29 @@ void track_and_verify_points(const ImageFeatures& a, const ImageFeatures& b,
     cands.push_back(m);
     cost.push_back(t.error[i]);
   }
+  for (size_t i = 0; i < t.ok.size(); ++i) {
+    if (!t.ok[i]) r.klt_untracked.push_back(static_cast<int>(i));
+  }
   const ScopedMs ms(field(timings, &MatchTimings::essential_ms));
   verify_points(b, std::move(cands), cost, options, r);
 }
 
 }  // namespace
 
+std::vector<int> klt_corners_to_skip(std::span<const int> untracked, int64_t frame,
+                                     int retry_frames) {
+  std::vector<int> skip;
+  if (retry_frames <= 1) return skip;
+  skip.reserve(untracked.size());
+  for (const int c : untracked) {
+    if ((static_cast<int64_t>(c) + frame) % retry_frames != 0) skip.push_back(c);
+  }
+  return skip;
+}
+
 TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
                               const MatcherOptions& options, std::span<const PointMatch> prior,
-                              MatchTimings* timings) {
+                              MatchTimings* timings, std::span<const int> skip) {
   const auto errors = options.validate();
   if (!errors.empty()) throw std::invalid_argument("match_two_view: " + join(errors));
   check_image(a, "match_two_view (a)");
@@ -545,7 +564,7 @@ TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
     const cv::Point2f shift = options.klt_shift_from_lines
                                   ? shift_from_lines(a, b, line_cands, options.klt)
                                   : cv::Point2f(0.0f, 0.0f);
-    track_and_verify_points(a, b, options, shift, prior, r, timings);
+    track_and_verify_points(a, b, options, shift, prior, skip, r, timings);
   }
   const ScopedMs ms(field(timings, &MatchTimings::lines_ms));
   verify_lines(a, b, options, line_cands, r);
@@ -719,8 +738,10 @@ bool FrameMatcher::current_keypoints() {
   return !current_.keypoints.empty();
 }
 
-void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior) {
+void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior,
+                                 std::vector<int> skip) {
   klt_priors_[key_id] = std::move(prior);
+  klt_skips_[key_id] = std::move(skip);
 }
 
 const TwoViewMatches* FrameMatcher::adopt_speculative(int64_t key_id) {
@@ -737,7 +758,9 @@ const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures
   const auto prior = klt_priors_.find(key_id);
   std::span<const PointMatch> p;
   if (prior != klt_priors_.end()) p = prior->second;
-  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p, &timings_))
+  std::span<const int> skip;
+  if (const auto s = klt_skips_.find(key_id); s != klt_skips_.end()) skip = s->second;
+  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p, &timings_, skip))
       .first->second;
 }
 
@@ -747,6 +770,7 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
   struct Task {
     KeyRef key;
     std::span<const PointMatch> prior;
+    std::span<const int> skip;
     TwoViewMatches result;
     MatchTimings timings;
     std::exception_ptr error;
@@ -773,6 +797,7 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
     Task t;
     t.key = k;
     if (const auto prior = klt_priors_.find(k.id); prior != klt_priors_.end()) t.prior = prior->second;
+    if (const auto s = klt_skips_.find(k.id); s != klt_skips_.end()) t.skip = s->second;
     tasks.push_back(std::move(t));
   }
   if (tasks.empty()) return;
@@ -780,7 +805,8 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
   // Task: no shared state (OpenCV's KLT and RANSAC are reentrant and deterministic).
   auto run = [&](Task& t) noexcept {
     try {
-      t.result = match_two_view(*t.key.features, current_, options_, t.prior, &t.timings);
+      t.result =
+          match_two_view(*t.key.features, current_, options_, t.prior, &t.timings, t.skip);
     } catch (...) {
       t.error = std::current_exception();
     }

@@ -1,6 +1,7 @@
 // KLT priors (match_two_view's `prior`, FrameMatcher::set_klt_prior): tracking a key image's
 // corners from their verified positions in the previous frame must verify the same points as
-// tracking from scratch, and bad priors must fall back to tracking from scratch.
+// tracking from scratch, and bad priors must fall back to tracking from scratch. And the retry
+// schedule of the corners KLT did not track (`skip`, klt_corners_to_skip).
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -151,6 +152,68 @@ TEST(KltPrior, DisabledPriorIsIgnoredAndFrameMatcherUsesIt) {
   EXPECT_EQ(corner_ids(cached), corner_ids(seeded));
 }
 
+// Corners KLT did not track are retried from scratch on one frame in retry_untracked_frames
+// (klt_corners_to_skip), staggered so that each frame retries a share of them.
+TEST(KltRetry, EachUntrackedCornerIsRetriedOnOneFrameInN) {
+  std::vector<int> untracked;
+  for (int c = 0; c < 40; ++c) untracked.push_back(3 * c + 1);
+  std::vector<int> retried(untracked.size(), 0);
+  for (int64_t frame = 17; frame < 17 + 4; ++frame) {
+    const std::vector<int> skip = klt_corners_to_skip(untracked, frame, 4);
+    EXPECT_TRUE(std::is_sorted(skip.begin(), skip.end()));
+    EXPECT_NEAR(static_cast<double>(untracked.size() - skip.size()), untracked.size() / 4.0, 1.0)
+        << "frame " << frame << " retries about a quarter";
+    for (size_t i = 0; i < untracked.size(); ++i) {
+      retried[i] += std::binary_search(skip.begin(), skip.end(), untracked[i]) ? 0 : 1;
+    }
+  }
+  for (size_t i = 0; i < untracked.size(); ++i) {
+    EXPECT_EQ(retried[i], 1) << "corner " << untracked[i] << " retried once in 4 frames";
+  }
+  EXPECT_TRUE(klt_corners_to_skip(untracked, 17, 1).empty()) << "1: every frame retries all";
+  EXPECT_TRUE(klt_corners_to_skip({}, 17, 4).empty());
+}
+
+// match_two_view's `skip`: those corners are not tracked from scratch (never verified, listed as
+// untracked); the others track exactly as without it, and corners with a prior still track.
+TEST(KltRetry, SkippedCornersAreLeftUntrackedAndTheOthersTrackAsBefore) {
+  const Sequence& s = sequence();
+  const TwoViewMatches all = match_two_view(s.key, s.current);
+  ASSERT_GE(all.n_points(), 50);
+  EXPECT_TRUE(std::is_sorted(all.klt_untracked.begin(), all.klt_untracked.end()));
+  for (const auto& p : all.points) {
+    EXPECT_FALSE(std::binary_search(all.klt_untracked.begin(), all.klt_untracked.end(), p.idx_a));
+  }
+  std::vector<int> skip;  // every third corner
+  for (int c = 0; c < static_cast<int>(s.key.corners_px.size()); c += 3) skip.push_back(c);
+  const TwoViewMatches some = match_two_view(s.key, s.current, {}, {}, nullptr, skip);
+  ASSERT_GE(some.n_points(), 30);
+  for (const int c : skip) {
+    EXPECT_TRUE(std::binary_search(some.klt_untracked.begin(), some.klt_untracked.end(), c)) << c;
+  }
+  int common = 0;
+  for (const auto& p : some.points) {
+    EXPECT_NE(p.idx_a % 3, 0) << "corner " << p.idx_a << " was to be skipped";
+    for (const auto& q : all.points) {
+      if (q.idx_a != p.idx_a) continue;
+      EXPECT_EQ(p.b_px, q.b_px) << "corner " << p.idx_a << " tracked as without skip";
+      ++common;
+    }
+  }
+  EXPECT_GE(common, static_cast<int>(0.9 * some.n_points()));
+  // A prior wins over the skip: a corner seeded from the previous frame is tracked from there.
+  const TwoViewMatches prior = match_two_view(s.key, s.previous);
+  std::vector<int> skip_all(s.key.corners_px.size());
+  for (size_t c = 0; c < skip_all.size(); ++c) skip_all[c] = static_cast<int>(c);
+  const TwoViewMatches seeded = match_two_view(s.key, s.current, {}, prior.points, nullptr, skip_all);
+  EXPECT_GE(static_cast<double>(seeded.n_points()), 0.9 * prior.n_points());
+  // FrameMatcher passes a key image's skip list with its prior.
+  FrameMatcher fm(s.current);
+  fm.set_klt_prior(4, {}, skip);
+  const TwoViewMatches& cached = fm.two_view(4, s.key);
+  EXPECT_EQ(corner_ids(cached), corner_ids(some));
+}
+
 TEST(KltPrior, InvalidPriorOptionsAreRejected) {
   MatcherOptions o;
   o.klt.prior_window_px = 10;
@@ -160,6 +223,8 @@ TEST(KltPrior, InvalidPriorOptionsAreRejected) {
   EXPECT_FALSE(o.validate().empty());
   o.klt.prior_max_level = 0;
   EXPECT_TRUE(o.validate().empty());
+  o.klt.retry_untracked_frames = 0;
+  EXPECT_FALSE(o.validate().empty());
 }
 
 }  // namespace

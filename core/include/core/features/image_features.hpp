@@ -61,6 +61,13 @@ struct KltOptions {
   int prior_max_level = 1;
   int prior_probes = 16;
   int prior_window_px = 11;
+  /// A key image's corner that KLT did not track into the previous frame (the track failed, or
+  /// it was not tried) is tracked from scratch again on one frame in `retry_untracked_frames`
+  /// only, staggered by corner index (klt_corners_to_skip; the navigator applies it, 1..1000;
+  /// 1: every frame). Tracking from scratch with every level is most of KLT's cost, and a corner
+  /// that failed a frame ago seldom succeeds in the next (docs/perception.md "Retrying untracked
+  /// corners").
+  int retry_untracked_frames = 4;
   /// KLT and the line detector work on photometrically normalised images (klt_image): each
   /// pixel's grey level minus the mean of a square window around it, divided by that window's
   /// standard deviation (floored). A light change multiplies the grey levels (a global gain, or

@@ -112,6 +112,9 @@ struct TwoViewMatches {
   /// The points are ORB matches (idx_a indexes a's keypoints, not its corners): see
   /// MatcherOptions::orb_fallback_below_points.
   bool points_from_orb = false;
+  /// a's corners KLT did not track into b (the track failed, or `skip` in match_two_view left
+  /// it out), ascending; empty when the points were not tracked.
+  std::vector<int> klt_untracked;
 
   int n_lines() const { return static_cast<int>(lines.size()); }
   int n_points() const { return static_cast<int>(points.size()); }
@@ -153,6 +156,14 @@ struct MatchTimings {
   double wide_baseline_ms = 0.0;  ///< ORB descriptor matching (its RANSAC: essential_ms)
 };
 
+/// Which of a key image's untracked corners (TwoViewMatches::klt_untracked of one frame) the
+/// next frame leaves out of tracking from scratch: all but those with (corner + frame) a multiple
+/// of `retry_frames` (KltOptions::retry_untracked_frames), so that each corner is retried on one
+/// frame in retry_frames and each frame retries about 1 / retry_frames of them. `frame`: the
+/// number of the frame the list is for (any origin); retry_frames <= 1 skips none.
+std::vector<int> klt_corners_to_skip(std::span<const int> untracked, int64_t frame,
+                                     int retry_frames);
+
 /// Descriptor matching (mutual + ratio) followed by the orientation checks; no epipolar check.
 std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& b,
                                    const LineMatchOptions& options = {});
@@ -163,11 +174,14 @@ std::vector<LineMatch> match_lines(const ImageFeatures& a, const ImageFeatures& 
 /// one; idx_a and b_px are used): those corners start from b_px with klt.prior_max_level levels
 /// instead of from their position in a with klt.max_level (faster), and fall back to the latter
 /// when that track fails. The result is a function of (a, b, options, prior).
-/// `timings`, when given, gets the stages' wall-clock time added.
+/// `timings`, when given, gets the stages' wall-clock time added. `skip`: corners of a not to
+/// track from scratch (a corner with a prior is still tracked from it): they are left
+/// untracked (TwoViewMatches::klt_untracked).
 TwoViewMatches match_two_view(const ImageFeatures& a, const ImageFeatures& b,
                               const MatcherOptions& options = {},
                               std::span<const PointMatch> prior = {},
-                              MatchTimings* timings = nullptr);
+                              MatchTimings* timings = nullptr,
+                              std::span<const int> skip = {});
 
 /// Wide-baseline verified lines and points (ORB keypoints of both views).
 TwoViewMatches match_wide_baseline(const ImageFeatures& a, const ImageFeatures& b,
@@ -206,7 +220,7 @@ class FrameMatcher {
 
   /// KLT priors for a key image (see match_two_view): set before the first two_view() of that
   /// key id (later calls have no effect on an already computed result).
-  void set_klt_prior(int64_t key_id, std::vector<PointMatch> prior);
+  void set_klt_prior(int64_t key_id, std::vector<PointMatch> prior, std::vector<int> skip = {});
 
   /// n(key, current): verified lines + KLT points (cached per key id).
   const TwoViewMatches& two_view(int64_t key_id, const ImageFeatures& key);
@@ -276,6 +290,7 @@ class FrameMatcher {
   /// Moves a held speculative result for `key_id` to the asked-for ones; null when none.
   const TwoViewMatches* adopt_speculative(int64_t key_id);
   std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
+  std::unordered_map<int64_t, std::vector<int>> klt_skips_;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
   std::unordered_map<int64_t, TwoViewMatches> control_;
   std::unordered_map<std::pair<int64_t, int64_t>, ThreeViewMatches, PairHash> three_view_;

@@ -324,6 +324,10 @@ class Navigator {
   // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
   // segment is forgotten, so it depends on the frames only.
   std::unordered_map<int, std::vector<features::PointMatch>> klt_priors_;
+  // The corners of those key images the next frame does not track from scratch
+  // (klt_corners_to_skip), and how many frames remember_tracks saw (its retry schedule).
+  std::unordered_map<int, std::vector<int>> klt_skips_;
+  int64_t remembered_frames_ = 0;
   // Odometry (issue 29): the estimate on the taught path, the frame's reading, the distance and
   // turn driven on odometry alone since vision was last usable, and this frame's vision fix's
   // correction of the estimate (distance m, |heading| rad).
