@@ -405,7 +405,16 @@
   function renderTeach() {
     const t = ui.state.teach || {};
     const d = ui.state.drive || {};
-    fillKv('teach-kv', [
+    const c = t.ceiling;  // ceiling mode: a mosaic instead of key images
+    fillKv('teach-kv', c ? [
+      ['relay images', 'chosen when the teach finishes'],
+      ['distance (map)', fmt(t.distance_m, 2, ' m')],
+      ['ceiling now', c.localised ? `${c.matched} landmarks matched, ${c.added} new`
+        : 'no pose in the mosaic: drive back under mapped ceiling'],
+      ['mosaic', `${c.mosaic_landmarks} landmarks, ${c.frames_without_pose} frames without a pose`
+        + (c.loops_closed ? `, ${c.loops_closed} loops closed` : '')],
+      ['command', `${fmt(d.v_m_s)} m/s, ${fmt(d.omega_rad_s)} rad/s`],
+    ] : [
       ['key images', String((t.key_images || []).length)],
       ['distance (map)', fmt(t.distance_m, 2, ' m')],
       ['features now', t.n_lines !== undefined ? `${t.n_lines} lines, ${t.n_points} points` : '--'],

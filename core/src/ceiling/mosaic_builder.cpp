@@ -602,6 +602,13 @@ std::vector<std::vector<LandmarkSighting>> MosaicBuilder::kept_sightings() const
   return out;
 }
 
+size_t MosaicBuilder::kept_landmarks() const {
+  size_t n = 0;
+  for (const Landmark& l : landmarks_)
+    if (l.observations >= options_.min_observations) ++n;
+  return n;
+}
+
 size_t MosaicBuilder::candidates() const {
   size_t n = 0;
   for (const Landmark& l : landmarks_)

@@ -173,6 +173,8 @@ class CeilingTeacher {
   const std::filesystem::path& frame_store_dir() const { return store_->dir(); }
   uint64_t frame_store_bytes() const { return store_->bytes_on_disk(); }
   int64_t unlocalised_frames() const { return unlocalised_; }
+  /// The landmarks the mosaic keeps so far (seen often enough; MosaicBuilder::kept_landmarks).
+  size_t mosaic_landmarks() const { return builder_.kept_landmarks(); }
   /// The mosaic builder's loop closures so far (docs/method/ceiling.md "Closing a loop").
   const std::vector<core::ceiling::LoopClosure>& loop_closures() const {
     return builder_.loop_closures();

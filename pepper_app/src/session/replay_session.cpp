@@ -466,6 +466,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         // contradict it.
         const bool drawn = !t.overlay.lines.empty() || !t.overlay.points_px.empty();
         if (options.ceiling_telemetry) {
+          overlay.erase("lines");  // ceiling landmarks are points only: no empty legend entry
           // The second line says where the robot is in the mosaic (or that it coasts).
           overlay["text"] = nlohmann::json::array(
               {std::string(nav::to_string(t.state)) + "  relay IP " + std::to_string(t.ip) +

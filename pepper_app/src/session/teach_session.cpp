@@ -347,7 +347,13 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
       if (recording && ceiling_teacher) {
         const core::ceiling::MosaicFrameResult step =
             ceiling_teacher->add_frame(*frame, travelled_m);
-        if (link.has_ui()) ceiling_overlay = ceiling_teacher->overlay(step);
+        if (link.has_ui()) {
+          ceiling_overlay = ceiling_teacher->overlay(step);
+          link.publish_state(
+              {{"teach", ceiling_teach_state(travelled_m, step, ceiling_teacher->mosaic_landmarks(),
+                                             ceiling_teacher->unlocalised_frames(),
+                                             ceiling_teacher->loop_closures().size())}});
+        }
         if (pos) {
           result.path_m.push_back(*pos);
           result.path_yaw_rad.push_back(yaw_rad);
@@ -478,6 +484,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
             core::features::detected_overlay(teacher->last_frame_features()), "detected");
       } else if (ceiling_overlay) {
         overlay = overlay_to_json(*ceiling_overlay, "ceiling landmarks");
+        overlay.erase("lines");  // ceiling landmarks are points only: no empty legend entry
       }
       overlay["text"] = nlohmann::json::array(
           {std::string(recording ? "REC " : "") + "frame " + std::to_string(frame->index) +

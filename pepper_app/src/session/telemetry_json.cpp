@@ -163,4 +163,17 @@ std::string ceiling_overlay_caption(const nlohmann::json& c) {
   return buf;
 }
 
+nlohmann::json ceiling_teach_state(double distance_m, const core::ceiling::MosaicFrameResult& step,
+                                   size_t mosaic_landmarks, int64_t frames_without_pose,
+                                   size_t loops_closed) {
+  return {{"distance_m", distance_m},
+          {"ceiling",
+           {{"matched", step.inliers},
+            {"added", step.added},
+            {"localised", step.localised},
+            {"mosaic_landmarks", mosaic_landmarks},
+            {"frames_without_pose", frames_without_pose},
+            {"loops_closed", loops_closed}}}};
+}
+
 }  // namespace pepper::app

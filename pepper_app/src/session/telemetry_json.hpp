@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "core/ceiling/mosaic_builder.hpp"
 #include "core/features/feature_overlay.hpp"
 #include "core/navigator/navigator.hpp"
 
@@ -31,5 +32,14 @@ nlohmann::json overlay_to_json(const core::features::FeatureOverlay& overlay,
 /// mosaic (x, y in metres, heading in degrees), "coasting on odometry" with the distance when
 /// the pose is not this frame's fix, "no pose in the mosaic" when none is known.
 std::string ceiling_overlay_caption(const nlohmann::json& ceiling);
+
+/// The teach panel's state in ceiling mode (the UI's "teach" state; docs/teach_ui.md): the
+/// distance driven, and under "ceiling" this frame's landmarks (matched to the mosaic, added to
+/// it, whether the frame got a pose), the mosaic's landmarks so far, the frames without a pose
+/// and the loops closed. The relay images are chosen when the teach finishes, so there is no key
+/// image list.
+nlohmann::json ceiling_teach_state(double distance_m, const core::ceiling::MosaicFrameResult& step,
+                                   size_t mosaic_landmarks, int64_t frames_without_pose,
+                                   size_t loops_closed);
 
 }  // namespace pepper::app

@@ -444,6 +444,9 @@ TEST(CeilingTeachOverlay, DrawsTheFramesLandmarksWhereTheCameraSawThem) {
     drawn += o.points_px.size();
   }
   EXPECT_GT(drawn, 40u * 10u) << "a ceiling with texture gives landmarks on every frame";
+  // The teach panel's mosaic count is the map's.
+  EXPECT_GT(teacher.mosaic_landmarks(), 0u);
+  EXPECT_EQ(teacher.mosaic_landmarks(), teacher.finish().mosaic.landmarks.size());
 }
 
 }  // namespace

@@ -60,6 +60,26 @@ TEST(OverlayJson, TheCeilingCaptionSaysWhereTheRobotIsInTheMosaic) {
   EXPECT_EQ(ceiling_overlay_caption(c), "ceiling: 3 of 80 landmarks, no pose in the mosaic");
 }
 
+// The teach panel in ceiling mode: this frame's landmarks and the mosaic's, no key image list.
+TEST(OverlayJson, TheCeilingTeachStateSaysWhatTheMosaicHas) {
+  core::ceiling::MosaicFrameResult step;
+  step.localised = true;
+  step.inliers = 42;
+  step.added = 7;
+  const nlohmann::json j = ceiling_teach_state(3.25, step, 812, 5, 1);
+  EXPECT_EQ(j.at("distance_m"), 3.25);
+  EXPECT_FALSE(j.contains("key_images")) << "relay images are chosen at the end";
+  const nlohmann::json& c = j.at("ceiling");
+  EXPECT_EQ(c.at("matched"), 42);
+  EXPECT_EQ(c.at("added"), 7);
+  EXPECT_EQ(c.at("localised"), true);
+  EXPECT_EQ(c.at("mosaic_landmarks"), 812);
+  EXPECT_EQ(c.at("frames_without_pose"), 5);
+  EXPECT_EQ(c.at("loops_closed"), 1);
+  step.localised = false;
+  EXPECT_EQ(ceiling_teach_state(3.25, step, 812, 6, 1).at("ceiling").at("localised"), false);
+}
+
 TEST(TaughtPathFile, RoundTripsAndIsOptional) {
   const fs::path dir = fresh_dir("roundtrip");
   fs::create_directories(dir);

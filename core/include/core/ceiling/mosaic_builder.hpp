@@ -228,7 +228,10 @@ class MosaicBuilder {
   /// Per frame so far, the base pose (nullopt-like: localised = false where none was found).
   /// Poses recorded before a loop closure are the corrected ones.
   const std::vector<MosaicFrameResult>& frames() const { return frames_; }
+  /// Landmarks not yet seen often enough to be kept (min_observations).
   size_t candidates() const;
+  /// Landmarks mosaic() would keep now (no copy).
+  size_t kept_landmarks() const;
   /// The loop closures so far, in order.
   const std::vector<LoopClosure>& loop_closures() const { return closures_; }
   /// Loop closures refused because their correction was beyond what a chain drifts
