@@ -454,9 +454,11 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
 
       if (link.has_ui()) {
         // Ceiling mode: the points are the ceiling landmarks the mosaic localiser kept.
-        nlohmann::json overlay = overlay_to_json(
-            t.overlay, options.ceiling_telemetry   ? std::string("ceiling landmarks")
-                       : t.overlay.key_index < 0 ? std::string("matched")
+        nlohmann::json overlay =
+            options.ceiling_telemetry
+                ? ceiling_overlay_to_json(t.overlay)
+                : overlay_to_json(t.overlay, t.overlay.key_index < 0
+                                                 ? std::string("matched")
                                                  : "IN " + std::to_string(t.overlay.key_index) +
                                                        " matched");
         // The caption's counts are the navigator's matches with IN before verification; the
@@ -466,7 +468,6 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         // contradict it.
         const bool drawn = !t.overlay.lines.empty() || !t.overlay.points_px.empty();
         if (options.ceiling_telemetry) {
-          overlay.erase("lines");  // ceiling landmarks are points only: no empty legend entry
           // The second line says where the robot is in the mosaic (or that it coasts).
           overlay["text"] = nlohmann::json::array(
               {std::string(nav::to_string(t.state)) + "  relay IP " + std::to_string(t.ip) +

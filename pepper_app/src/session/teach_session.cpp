@@ -483,8 +483,7 @@ TeachResult run_teach_session(RobotConnection& robot, const TeachSessionOptions&
         overlay = overlay_to_json(
             core::features::detected_overlay(teacher->last_frame_features()), "detected");
       } else if (ceiling_overlay) {
-        overlay = overlay_to_json(*ceiling_overlay, "ceiling landmarks");
-        overlay.erase("lines");  // ceiling landmarks are points only: no empty legend entry
+        overlay = ceiling_overlay_to_json(*ceiling_overlay);
       }
       overlay["text"] = nlohmann::json::array(
           {std::string(recording ? "REC " : "") + "frame " + std::to_string(frame->index) +

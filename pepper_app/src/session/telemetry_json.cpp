@@ -176,4 +176,10 @@ nlohmann::json ceiling_teach_state(double distance_m, const core::ceiling::Mosai
             {"loops_closed", loops_closed}}}};
 }
 
+nlohmann::json ceiling_overlay_to_json(const core::features::FeatureOverlay& overlay) {
+  nlohmann::json j = overlay_to_json(overlay, "ceiling landmarks");
+  j.erase("lines");
+  return j;
+}
+
 }  // namespace pepper::app

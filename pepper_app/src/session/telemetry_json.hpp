@@ -27,6 +27,10 @@ nlohmann::json odometry_to_json(const std::optional<core::OdometryPose>& odom);
 nlohmann::json overlay_to_json(const core::features::FeatureOverlay& overlay,
                                const std::string& what);
 
+/// Ceiling mode's overlay (teach and replay views): the points as "ceiling landmarks points" and
+/// no lines group (ceiling landmarks are points only: no empty legend entry).
+nlohmann::json ceiling_overlay_to_json(const core::features::FeatureOverlay& overlay);
+
 /// The replay view's second caption line in ceiling mode, from one step's ceiling telemetry
 /// (ceiling_telemetry_to_json): the localiser's inliers of its matches and the pose in the
 /// mosaic (x, y in metres, heading in degrees), "coasting on odometry" with the distance when

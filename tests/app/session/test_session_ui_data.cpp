@@ -60,6 +60,16 @@ TEST(OverlayJson, TheCeilingCaptionSaysWhereTheRobotIsInTheMosaic) {
   EXPECT_EQ(ceiling_overlay_caption(c), "ceiling: 3 of 80 landmarks, no pose in the mosaic");
 }
 
+// Ceiling overlays (teach and replay views) are points only: no lines group in the legend.
+TEST(OverlayJson, CeilingOverlaysArePointsOnly) {
+  core::features::FeatureOverlay o;
+  o.points_px.emplace_back(3.49f, 7.51f);
+  const nlohmann::json j = ceiling_overlay_to_json(o);
+  EXPECT_FALSE(j.contains("lines"));
+  EXPECT_EQ(j.at("points")[0].at("label"), "ceiling landmarks points");
+  EXPECT_EQ(j.at("points")[0].at("uv"), nlohmann::json::parse("[[3,8]]"));
+}
+
 // The teach panel in ceiling mode: this frame's landmarks and the mosaic's, no key image list.
 TEST(OverlayJson, TheCeilingTeachStateSaysWhatTheMosaicHas) {
   core::ceiling::MosaicFrameResult step;
