@@ -42,6 +42,10 @@
 //                              session 31).
 //   BM_RealNavigatorStep{Qvga,Vga}Fast    the same with the options of the app's `fast` preset
 //                              (the defaults and a 9 px KLT window; issue 22).
+//   BM_RealNavigatorStep{Qvga,Vga}RetryEveryFrame  every untracked corner retried from scratch
+//                              on every frame (features.klt.retry_untracked_frames 1).
+//   BM_RealNavigatorStep{Qvga,Vga}Klt20   KLT's iteration budget before session 37 (20
+//                              iterations per level, epsilon 0.03 px).
 //   BM_RealNavigatorStep{Qvga,Vga}TwoThreads  the defaults with OpenCV on 2 threads
 //                              (cv::setNumThreads(2) for the benchmark; IN and INN matched as two
 //                              concurrent tasks, FrameMatcher::compute_two_views): run it on two
@@ -443,6 +447,24 @@ void BM_RealNavigatorStepVgaRetryEveryFrame(benchmark::State& state) {
 BENCHMARK(BM_RealNavigatorStepVgaRetryEveryFrame)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(kIterations);
+
+// The KLT iteration budget before session 37 (features.klt.max_iterations 20, epsilon 0.03 px
+// instead of 10 and 0.1 px): the before of that change (docs/perception.md "KLT iteration
+// budget").
+core::navigator::NavigatorOptions klt_budget_20_options() {
+  core::navigator::NavigatorOptions o;
+  o.matcher.klt.max_iterations = 20;
+  o.matcher.klt.epsilon = 0.03;
+  return o;
+}
+void BM_RealNavigatorStepQvgaKlt20(benchmark::State& state) {
+  step_sequence(state, qvga_sequence(), klt_budget_20_options());
+}
+BENCHMARK(BM_RealNavigatorStepQvgaKlt20)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
+void BM_RealNavigatorStepVgaKlt20(benchmark::State& state) {
+  step_sequence(state, vga_sequence(), klt_budget_20_options());
+}
+BENCHMARK(BM_RealNavigatorStepVgaKlt20)->Unit(benchmark::kMillisecond)->Iterations(kIterations);
 
 }  // namespace
 
