@@ -740,8 +740,13 @@ bool FrameMatcher::current_keypoints() {
 
 void FrameMatcher::set_klt_prior(int64_t key_id, std::vector<PointMatch> prior,
                                  std::vector<int> skip) {
-  klt_priors_[key_id] = std::move(prior);
-  klt_skips_[key_id] = std::move(skip);
+  klt_starts_[key_id] = KltStart{std::move(prior), std::move(skip)};
+}
+
+const KltStart& FrameMatcher::klt_start(int64_t key_id) const {
+  static const KltStart kNone;
+  const auto it = klt_starts_.find(key_id);
+  return it == klt_starts_.end() ? kNone : it->second;
 }
 
 const TwoViewMatches* FrameMatcher::adopt_speculative(int64_t key_id) {
@@ -755,12 +760,10 @@ const TwoViewMatches* FrameMatcher::adopt_speculative(int64_t key_id) {
 const TwoViewMatches& FrameMatcher::two_view(int64_t key_id, const ImageFeatures& key) {
   if (const auto it = two_view_.find(key_id); it != two_view_.end()) return it->second;
   if (const TwoViewMatches* held = adopt_speculative(key_id)) return *held;
-  const auto prior = klt_priors_.find(key_id);
-  std::span<const PointMatch> p;
-  if (prior != klt_priors_.end()) p = prior->second;
-  std::span<const int> skip;
-  if (const auto s = klt_skips_.find(key_id); s != klt_skips_.end()) skip = s->second;
-  return two_view_.emplace(key_id, match_two_view(key, current_, options_, p, &timings_, skip))
+  const KltStart& start = klt_start(key_id);
+  return two_view_
+      .emplace(key_id,
+               match_two_view(key, current_, options_, start.prior, &timings_, start.skip))
       .first->second;
 }
 
@@ -796,8 +799,9 @@ void FrameMatcher::compute_two_views(std::span<const KeyRef> keys) {
     }
     Task t;
     t.key = k;
-    if (const auto prior = klt_priors_.find(k.id); prior != klt_priors_.end()) t.prior = prior->second;
-    if (const auto s = klt_skips_.find(k.id); s != klt_skips_.end()) t.skip = s->second;
+    const KltStart& start = klt_start(k.id);
+    t.prior = start.prior;
+    t.skip = start.skip;
     tasks.push_back(std::move(t));
   }
   if (tasks.empty()) return;

@@ -367,8 +367,7 @@ void Navigator::reset() {
   segment_from_switch_ = false;
   segment_driven_m_ = 0.0;
   final_ratio_in_ = -1;
-  klt_priors_.clear();
-  klt_skips_.clear();
+  klt_starts_.clear();
   tracker_.reset();
   odom_.reset();
   blind_m_ = blind_rad_ = 0.0;
@@ -450,17 +449,16 @@ bool Navigator::segment_overdue(int64_t t_ns) const {
 }
 
 void Navigator::remember_tracks(const features::FrameMatcher& fm) {
-  klt_priors_.clear();
-  klt_skips_.clear();
+  klt_starts_.clear();
   ++remembered_frames_;
   if (!switcher_) return;
   const localization::Segment& seg = switcher_->segment();
   for (const int i : {seg.prev, seg.next, seg.next_next.value_or(-1)}) {
     if (const features::TwoViewMatches* m = i >= 0 ? fm.computed_two_view(i) : nullptr) {
-      klt_priors_[i] = m->points;
       // The next frame retries only a share of the corners this one did not track.
-      klt_skips_[i] = features::klt_corners_to_skip(m->klt_untracked, remembered_frames_ + 1,
-                                                    options_.matcher.klt.retry_untracked_frames);
+      klt_starts_[i] = {m->points,
+                        features::klt_corners_to_skip(m->klt_untracked, remembered_frames_ + 1,
+                                                      options_.matcher.klt.retry_untracked_frames)};
     }
   }
 }
@@ -774,13 +772,10 @@ features::FrameMatcher Navigator::perceive(const Frame& frame, bool for_localisa
       options_.matcher.orb_fallback_below_points > 0 && options_.matcher.match_points;
   features::FrameMatcher fm(extractor_.extract(frame.gray, parts), options_.matcher,
                             orb_fallback ? &extractor_ : nullptr);
-  for (auto& [i, points] : klt_priors_) {
-    std::vector<int> skip;
-    if (const auto s = klt_skips_.find(i); s != klt_skips_.end()) skip = std::move(s->second);
-    fm.set_klt_prior(i, std::move(points), std::move(skip));
+  for (auto& [i, start] : klt_starts_) {
+    fm.set_klt_prior(i, std::move(start.prior), std::move(start.skip));
   }
-  klt_priors_.clear();
-  klt_skips_.clear();
+  klt_starts_.clear();
   tel.timings.extract_ms = ms_since(t0);
   return fm;
 }
@@ -1362,8 +1357,7 @@ StepResult Navigator::step(const Frame& frame) {
   if (state_ == NavState::kLost) {
     // Keep the last segment in telemetry for this frame, then forget it (relocalise next).
     switcher_.reset();
-    klt_priors_.clear();
-    klt_skips_.clear();
+    klt_starts_.clear();
   }
   return out;
 }

@@ -194,6 +194,13 @@ ThreeViewMatches verify_three_view(const ImageFeatures& x, const TwoViewMatches&
                                    const TwoViewMatches& y_to_hub,
                                    const MatcherOptions& options = {});
 
+/// Where KLT starts tracking one key image's corners on a frame (match_two_view's `prior` and
+/// `skip`, from the previous frame's results: FrameMatcher::set_klt_prior).
+struct KltStart {
+  std::vector<PointMatch> prior;  ///< the previous frame's verified matches of the key image
+  std::vector<int> skip;          ///< its corners not tracked from scratch (klt_corners_to_skip)
+};
+
 /// The work of one current frame against several key images, each pairwise result computed once.
 /// Key images are identified by a caller-chosen id (e.g. the key image index in the map; any
 /// unique int64, e.g. a negative value for the previous frame in teach). Using one id for two
@@ -289,8 +296,9 @@ class FrameMatcher {
   std::unordered_map<int64_t, TwoViewMatches> speculative_;  ///< computed, not asked for yet
   /// Moves a held speculative result for `key_id` to the asked-for ones; null when none.
   const TwoViewMatches* adopt_speculative(int64_t key_id);
-  std::unordered_map<int64_t, std::vector<PointMatch>> klt_priors_;
-  std::unordered_map<int64_t, std::vector<int>> klt_skips_;
+  std::unordered_map<int64_t, KltStart> klt_starts_;
+  /// The start held for key_id, or an empty one.
+  const KltStart& klt_start(int64_t key_id) const;
   std::unordered_map<int64_t, TwoViewMatches> wide_;
   std::unordered_map<int64_t, TwoViewMatches> control_;
   std::unordered_map<std::pair<int64_t, int64_t>, ThreeViewMatches, PairHash> three_view_;

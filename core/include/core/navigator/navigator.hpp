@@ -320,13 +320,12 @@ class Navigator {
   /// the spot (the path tracker, advanced by odometry and by every key-image switch): the drive
   /// command keeps v = 0 there, whichever law gives omega, as the dead-reckoning command does.
   bool on_taught_spot_turn_ = false;
-  // Speed: the verified point matches of the previous frame per key image of the segment, the
-  // KLT starting points of this frame (features::match_two_view's prior). Cleared whenever the
-  // segment is forgotten, so it depends on the frames only.
-  std::unordered_map<int, std::vector<features::PointMatch>> klt_priors_;
-  // The corners of those key images the next frame does not track from scratch
-  // (klt_corners_to_skip), and how many frames remember_tracks saw (its retry schedule).
-  std::unordered_map<int, std::vector<int>> klt_skips_;
+  // Speed: where this frame's KLT starts per key image of the segment (the previous frame's
+  // verified point matches, features::match_two_view's prior, and the corners it does not track
+  // from scratch, klt_corners_to_skip). Cleared whenever the segment is forgotten, so it depends
+  // on the frames only. remembered_frames_: how many frames remember_tracks saw (the retry
+  // schedule's clock).
+  std::unordered_map<int, features::KltStart> klt_starts_;
   int64_t remembered_frames_ = 0;
   // Odometry (issue 29): the estimate on the taught path, the frame's reading, the distance and
   // turn driven on odometry alone since vision was last usable, and this frame's vision fix's
