@@ -222,10 +222,15 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     const auto json_m = [](double m) {
       return std::isfinite(m) ? nlohmann::json(m) : nlohmann::json(nullptr);
     };
+    // The IP / IN / INN thumbnails come from the map's own images (cv::Mat shares the pixels):
+    // the navigator that takes the map is absent where a step function replaces it (ceiling
+    // mode), whose relay images the panel shows all the same.
+    std::vector<cv::Mat> key_grays;
+    for (const auto& k : map.key_images) key_grays.push_back(k.features.gray);
     if (!step_override) navigator.emplace(std::move(map), options.navigator);
     const auto key_gray = [&](int i) -> cv::Mat {
-      if (!navigator || i < 0 || i >= result.key_image_count) return {};
-      return navigator->map().key_images[i].features.gray;
+      if (i < 0 || i >= static_cast<int>(key_grays.size())) return {};
+      return key_grays[static_cast<size_t>(i)];
     };
     if (!options.telemetry_jsonl.empty()) {
       telemetry.open(options.telemetry_jsonl);
