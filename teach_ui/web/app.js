@@ -530,10 +530,13 @@
         ['v_m_s', 'v (m/s)', '#2563eb'],
         ['omega_rad_s', 'ω (rad/s)', '#f97316'],
       ]);
-      drawPlot($('plot-feat'), [
-        ['n_lines', 'lines', '#16a34a'],
-        ['n_points', 'points', '#9333ea'],
-      ]);
+      // The counts the samples carry: lines and points, or in ceiling mode the landmarks the
+      // mosaic kept (and, while teaching, the new ones it added).
+      const has = (key) => samples.some((s) => typeof s[key] === 'number');
+      drawPlot($('plot-feat'), has('ceiling_inliers')
+        ? [['ceiling_inliers', 'ceiling landmarks', '#ef4444'],
+          ['ceiling_added', 'new landmarks', '#f59e0b']].filter(([key]) => has(key))
+        : [['n_lines', 'lines', '#16a34a'], ['n_points', 'points', '#9333ea']]);
     });
   }
 

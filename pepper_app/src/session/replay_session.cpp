@@ -486,12 +486,19 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                    std::to_string(t.n_points_next) + (drawn ? "" : " (none drawn)")});
         }
         link.publish_frame(*frame, overlay);
-        link.publish_samples({{"t_s", s.t_s},
-                              {"v_m_s", s.v_m_s},
-                              {"omega_rad_s", s.omega_rad_s},
-                              {"n_lines", s.n_lines},
-                              {"n_points", s.n_points},
-                              {"dead_reckoning", s.dead_reckoning}});
+        nlohmann::json sample = {{"t_s", s.t_s},
+                                 {"v_m_s", s.v_m_s},
+                                 {"omega_rad_s", s.omega_rad_s},
+                                 {"dead_reckoning", s.dead_reckoning}};
+        if (options.ceiling_telemetry) {
+          // Ceiling mode: the counts plot is the landmarks the mosaic localiser kept, as the
+          // ceiling teach plots them (no lines, and no forward points, to plot).
+          sample["ceiling_inliers"] = options.ceiling_telemetry().value("inliers", 0);
+        } else {
+          sample["n_lines"] = s.n_lines;
+          sample["n_points"] = s.n_points;
+        }
+        link.publish_samples(sample);
         if (t.localization_ran) last_localisation = localisation_json(t, options);
         const int passed = std::clamp(t.ip, 0, std::max(0, result.key_image_count - 1));
         nlohmann::json replay_state = {

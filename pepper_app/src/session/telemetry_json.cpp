@@ -177,8 +177,9 @@ nlohmann::json ceiling_teach_state(double distance_m, const core::ceiling::Mosai
 }
 
 nlohmann::json ceiling_overlay_to_json(const core::features::FeatureOverlay& overlay) {
-  nlohmann::json j = overlay_to_json(overlay, "ceiling landmarks");
+  nlohmann::json j = overlay_to_json(overlay, "ceiling");
   j.erase("lines");
+  j["points"][0]["label"] = "ceiling landmarks";  // the legend reads "ceiling landmarks: N"
   return j;
 }
 

@@ -27,7 +27,7 @@ nlohmann::json odometry_to_json(const std::optional<core::OdometryPose>& odom);
 nlohmann::json overlay_to_json(const core::features::FeatureOverlay& overlay,
                                const std::string& what);
 
-/// Ceiling mode's overlay (teach and replay views): the points as "ceiling landmarks points" and
+/// Ceiling mode's overlay (teach and replay views): the points as "ceiling landmarks" and
 /// no lines group (ceiling landmarks are points only: no empty legend entry).
 nlohmann::json ceiling_overlay_to_json(const core::features::FeatureOverlay& overlay);
 

@@ -1,14 +1,17 @@
-// The replay view's IP / IN / INN thumbnails (docs/teach_ui.md): the session publishes the
-// segment's key images whenever IN changes, also where a step function replaces the navigator
-// (ceiling mode), whose relay images are the map's key images all the same. In-process mock
-// robot, the real UiServer and a WebSocket client that connects after the replay and reads the
-// snapshot (every image published, latest per name).
+// What the replay view gets in ceiling mode (docs/teach_ui.md): the IP / IN / INN thumbnails,
+// published whenever IN changes, also where a step function replaces the navigator (ceiling
+// mode), whose relay images are the map's key images all the same; and plot samples that carry
+// the ceiling landmarks instead of lines and points. In-process mock robot, the real UiServer and
+// a WebSocket client that connects after the replay and reads the snapshot (every image
+// published, latest per name, and the sample history).
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -27,27 +30,41 @@ namespace nav = core::navigator;
 
 const std::string kWorld = std::string("mock:") + PEPPER_SOURCE_DIR + "/worlds/robotics_room.yaml";
 
-/// Names of the images in a late client's snapshot, with their payload sizes; stops at the frame
-/// (the snapshot's last part) or when nothing more comes.
-std::map<std::string, size_t> snapshot_images(std::uint16_t port) {
+struct Snapshot {
+  std::map<std::string, size_t> image_bytes;  ///< name -> payload size
+  std::vector<nlohmann::json> samples;
+};
+
+/// A late client's snapshot; stops at the frame (the snapshot's last part) or when nothing more
+/// comes.
+Snapshot read_snapshot(std::uint16_t port) {
   teach_ui::testing::WsClient client(port);
-  std::map<std::string, size_t> images;
+  Snapshot snap;
   for (;;) {
     const auto m = client.read(std::chrono::seconds(5));
     if (!m) break;
-    if (!m->binary) continue;
+    if (!m->binary) {
+      const nlohmann::json j = nlohmann::json::parse(m->data);
+      if (j.value("type", "") == "samples") {
+        for (const auto& s : j.at("samples")) snap.samples.push_back(s);
+      }
+      continue;
+    }
     const auto v = teach_ui::decode_binary_message(m->data);
     if (!v) continue;
     if (v->kind == teach_ui::kBinaryFrame) break;
     if (v->kind == teach_ui::kBinaryImage) {
-      images[nlohmann::json::parse(v->header_json).at("name").get<std::string>()] =
+      snap.image_bytes[nlohmann::json::parse(v->header_json).at("name").get<std::string>()] =
           v->payload.size();
     }
   }
-  return images;
+  return snap;
 }
 
-TEST(ReplayUiImages, TheSegmentsKeyImagesAreShownWhenAStepFunctionDrives) {
+/// Six frames of a replay whose step (as ceiling mode's: the navigator is replaced) is on relay
+/// images 1 -> 2 -> 3 of a four-image map, with `ceiling_telemetry` when given; the UI's
+/// snapshot after it.
+Snapshot replay_with_a_step_function(std::function<nlohmann::json()> ceiling_telemetry) {
   const fs::path web = fs::temp_directory_path() / "pepper_replay_ui_images_web";
   fs::remove_all(web);
   fs::create_directories(web);
@@ -69,8 +86,8 @@ TEST(ReplayUiImages, TheSegmentsKeyImagesAreShownWhenAStepFunctionDrives) {
   options.camera.height_px = 240;
   options.frame_timeout_ms = 200;
   options.max_frames = 6;
+  options.ceiling_telemetry = std::move(ceiling_telemetry);
   SessionLink link(&ui, nullptr);
-  // As ceiling mode's step: the navigator is replaced; the segment is relay images 1 -> 2 -> 3.
   const ReplayResult r = run_replay_session(robot, map, options, link, [](const core::Frame& f) {
     nav::StepResult s;
     s.command = {0.1, 0.0, false, nav::StopReason::kNone};
@@ -79,16 +96,37 @@ TEST(ReplayUiImages, TheSegmentsKeyImagesAreShownWhenAStepFunctionDrives) {
     s.telemetry.ip = 1;
     s.telemetry.in = 2;
     s.telemetry.inn = 3;
+    s.telemetry.n_lines_next = 5;
+    s.telemetry.n_points_next = 9;
     return s;
   });
   EXPECT_EQ(r.outcome, "max_frames");
-  const std::map<std::string, size_t> images = snapshot_images(ui.port());
-  for (const char* name : {"ip", "in", "inn", "key/0", "key/3"}) {
-    ASSERT_TRUE(images.count(name)) << name << " was not published";
-    EXPECT_GT(images.at(name), 0u) << name << " is empty";
-  }
+  Snapshot snap = read_snapshot(ui.port());
   ui.stop();
   fs::remove_all(web);
+  return snap;
+}
+
+TEST(ReplayUiImages, TheSegmentsKeyImagesAreShownWhenAStepFunctionDrives) {
+  const Snapshot snap = replay_with_a_step_function({});
+  for (const char* name : {"ip", "in", "inn", "key/0", "key/3"}) {
+    ASSERT_TRUE(snap.image_bytes.count(name)) << name << " was not published";
+    EXPECT_GT(snap.image_bytes.at(name), 0u) << name << " is empty";
+  }
+  ASSERT_FALSE(snap.samples.empty());
+  EXPECT_EQ(snap.samples.back().value("n_points", -1), 9);
+  EXPECT_FALSE(snap.samples.back().contains("ceiling_inliers"));
+}
+
+TEST(ReplayUiImages, CeilingModeSamplesCarryTheLandmarksNotLinesAndPoints) {
+  const Snapshot snap =
+      replay_with_a_step_function([] { return nlohmann::json{{"inliers", 17}, {"matches", 20}}; });
+  ASSERT_FALSE(snap.samples.empty());
+  for (const nlohmann::json& s : snap.samples) {
+    EXPECT_EQ(s.value("ceiling_inliers", -1), 17) << s.dump();
+    EXPECT_FALSE(s.contains("n_lines")) << s.dump();
+    EXPECT_FALSE(s.contains("n_points")) << s.dump();
+  }
 }
 
 }  // namespace

@@ -66,7 +66,7 @@ TEST(OverlayJson, CeilingOverlaysArePointsOnly) {
   o.points_px.emplace_back(3.49f, 7.51f);
   const nlohmann::json j = ceiling_overlay_to_json(o);
   EXPECT_FALSE(j.contains("lines"));
-  EXPECT_EQ(j.at("points")[0].at("label"), "ceiling landmarks points");
+  EXPECT_EQ(j.at("points")[0].at("label"), "ceiling landmarks");
   EXPECT_EQ(j.at("points")[0].at("uv"), nlohmann::json::parse("[[3,8]]"));
 }
 
