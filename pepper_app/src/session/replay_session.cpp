@@ -205,10 +205,14 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
     nlohmann::json keys = nlohmann::json::array();
     for (std::size_t i = 0; i < map.key_images.size(); ++i) {
       const auto& f = map.key_images[i].features;
-      keys.push_back({{"index", i},
-                      {"n_lines", f.lines.size()},
-                      {"n_points", f.corners_px.size()},
-                      {"weak", false}});
+      nlohmann::json key = {{"index", i}, {"weak", false}};
+      if (!options.ceiling_telemetry) {
+        // Forward mode's features; a ceiling map's relay images are driven by the mosaic's
+        // landmarks, not by these counts, so their captions leave them out.
+        key["n_lines"] = f.lines.size();
+        key["n_points"] = f.corners_px.size();
+      }
+      keys.push_back(std::move(key));
       if (link.has_ui()) link.publish_thumbnail("key/" + std::to_string(i), f.gray);
     }
     link.publish_state({{"teach", {{"key_images", keys}}}});

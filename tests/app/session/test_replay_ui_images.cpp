@@ -1,9 +1,10 @@
 // What the replay view gets in ceiling mode (docs/teach_ui.md): the IP / IN / INN thumbnails,
 // published whenever IN changes, also where a step function replaces the navigator (ceiling
 // mode), whose relay images are the map's key images all the same; and plot samples that carry
-// the ceiling landmarks instead of lines and points. In-process mock robot, the real UiServer and
-// a WebSocket client that connects after the replay and reads the snapshot (every image
-// published, latest per name, and the sample history).
+// the ceiling landmarks instead of lines and points, and key-image captions without forward
+// counts. In-process mock robot, the real UiServer and a WebSocket client that connects after
+// the replay and reads the snapshot (every image published, latest per name, the state and the
+// sample history).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -33,6 +34,7 @@ const std::string kWorld = std::string("mock:") + PEPPER_SOURCE_DIR + "/worlds/r
 struct Snapshot {
   std::map<std::string, size_t> image_bytes;  ///< name -> payload size
   std::vector<nlohmann::json> samples;
+  nlohmann::json key_images;  ///< the state's teach.key_images (the strip's captions)
 };
 
 /// A late client's snapshot; stops at the frame (the snapshot's last part) or when nothing more
@@ -47,6 +49,9 @@ Snapshot read_snapshot(std::uint16_t port) {
       const nlohmann::json j = nlohmann::json::parse(m->data);
       if (j.value("type", "") == "samples") {
         for (const auto& s : j.at("samples")) snap.samples.push_back(s);
+      }
+      if (j.value("type", "") == "state" && j.at("state").contains("teach")) {
+        snap.key_images = j.at("state").at("teach").value("key_images", nlohmann::json());
       }
       continue;
     }
@@ -116,6 +121,8 @@ TEST(ReplayUiImages, TheSegmentsKeyImagesAreShownWhenAStepFunctionDrives) {
   ASSERT_FALSE(snap.samples.empty());
   EXPECT_EQ(snap.samples.back().value("n_points", -1), 9);
   EXPECT_FALSE(snap.samples.back().contains("ceiling_inliers"));
+  ASSERT_EQ(snap.key_images.size(), 4u);
+  EXPECT_TRUE(snap.key_images[0].contains("n_lines")) << snap.key_images.dump();
 }
 
 TEST(ReplayUiImages, CeilingModeSamplesCarryTheLandmarksNotLinesAndPoints) {
@@ -126,6 +133,12 @@ TEST(ReplayUiImages, CeilingModeSamplesCarryTheLandmarksNotLinesAndPoints) {
     EXPECT_EQ(s.value("ceiling_inliers", -1), 17) << s.dump();
     EXPECT_FALSE(s.contains("n_lines")) << s.dump();
     EXPECT_FALSE(s.contains("n_points")) << s.dump();
+  }
+  // The strip's captions carry no forward counts either.
+  ASSERT_EQ(snap.key_images.size(), 4u);
+  for (const nlohmann::json& k : snap.key_images) {
+    EXPECT_FALSE(k.contains("n_lines")) << k.dump();
+    EXPECT_FALSE(k.contains("n_points")) << k.dump();
   }
 }
 
