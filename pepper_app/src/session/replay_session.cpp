@@ -420,7 +420,11 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
                              {"command", command_to_json(c)},
                              {"telemetry", telemetry_to_json(t)}};
       if (!robot_view.telemetry.is_null()) line["robot"] = robot_view.telemetry;
-      if (options.ceiling_telemetry) line["ceiling"] = options.ceiling_telemetry();
+      // Ceiling mode: this step's ceiling telemetry, built once for the JSON line, the
+      // caption and the plot.
+      const nlohmann::json ceiling =
+          options.ceiling_telemetry ? options.ceiling_telemetry() : nlohmann::json();
+      if (options.ceiling_telemetry) line["ceiling"] = ceiling;
       if (robot.mock) {
         const auto gt = robot.mock->ground_truth();
         s.has_pose = true;
@@ -481,7 +485,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
           overlay["text"] = nlohmann::json::array(
               {std::string(nav::to_string(t.state)) + "  relay IP " + std::to_string(t.ip) +
                    "  IN " + std::to_string(t.in),
-               ceiling_overlay_caption(options.ceiling_telemetry())});
+               ceiling_overlay_caption(ceiling)});
         } else {
           overlay["text"] = nlohmann::json::array(
               {std::string(nav::to_string(t.state)) + "  IP " + std::to_string(t.ip) + "  IN " +
@@ -497,7 +501,7 @@ ReplayResult run_replay_session(RobotConnection& robot, core::memory::VisualMemo
         if (options.ceiling_telemetry) {
           // Ceiling mode: the counts plot is the landmarks the mosaic localiser kept, as the
           // ceiling teach plots them (no lines, and no forward points, to plot).
-          sample["ceiling_inliers"] = options.ceiling_telemetry().value("inliers", 0);
+          sample["ceiling_inliers"] = ceiling.value("inliers", 0);
         } else {
           sample["n_lines"] = s.n_lines;
           sample["n_points"] = s.n_points;
