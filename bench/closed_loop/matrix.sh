@@ -13,10 +13,12 @@
 # links them from one index page.
 #
 # Usage: bench/closed_loop/matrix.sh [--out DIR] [--app BIN] [--size WxH] [--starts N]
-#                                    [--gen-starts N] [--gen-seeds N]
+#                                    [--gen-starts N] [--gen-seeds N] [--gen-first-seed S]
 #                                    [--jobs N] [--shard I/N] [--only REGEX] [--list]
 #                                    [--mode forward|ceiling] [--set KEY=VALUE]...
 #   --gen-starts N  starts per generated world (5); --gen-seeds N: seeds 1..N (20; 0: none)
+#   --gen-first-seed S  the generated worlds' seeds start at S instead of 1 (S..S+N-1): fresh
+#                 worlds nothing was tuned on, e.g. --gen-first-seed 101
 #   --shard I/N   run only configurations I, I+N, I+2N, ... (1-based) of the list
 #   --only REGEX  run only configurations whose name matches (e.g. 'robotics_room', 'light',
 #                 '^gen_' for the generated worlds only)
@@ -39,6 +41,7 @@ SIZE=640x480
 STARTS=10
 GEN_STARTS=5
 GEN_SEEDS=20
+GEN_FIRST_SEED=1
 JOBS=2
 SHARD=1/1
 ONLY=.
@@ -52,13 +55,14 @@ while [[ $# -gt 0 ]]; do
     --starts) STARTS=$2; shift 2 ;;
     --gen-starts) GEN_STARTS=$2; shift 2 ;;
     --gen-seeds) GEN_SEEDS=$2; shift 2 ;;
+    --gen-first-seed) GEN_FIRST_SEED=$2; shift 2 ;;
     --jobs) JOBS=$2; shift 2 ;;
     --shard) SHARD=$2; shift 2 ;;
     --only) ONLY=$2; shift 2 ;;
     --list) LIST=1; shift ;;
     --set) SETS+=(--set "$2"); shift 2 ;;
     --mode) SETS+=(--mode "$2"); shift 2 ;;
-    -h|--help) sed -n '2,33p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,35p' "$0"; exit 0 ;;
     *) echo "matrix.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -76,7 +80,7 @@ for w in "${WORLDS[@]}"; do
 done
 GEN_KINDS=(building room corridor)  # by seed % 3
 gen_world() { echo "gen_${GEN_KINDS[$(( $1 % 3 ))]}_$1"; }
-for (( seed = 1; seed <= GEN_SEEDS; ++seed )); do
+for (( seed = GEN_FIRST_SEED; seed < GEN_FIRST_SEED + GEN_SEEDS; ++seed )); do
   g=$(gen_world "$seed")
   S="--starts $GEN_STARTS --world $OUT/worlds/$g.yaml"
   CONFIGS+=("${g}_none|$S --disturbance none")

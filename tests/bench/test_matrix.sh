@@ -62,6 +62,11 @@ done < "$TMP/slow_pids"
 ls "$TMP"/out2/*.json > /dev/null 2>&1 && fail "a stopped run left a JSON"
 grep -q "stopped; the same command resumes" "$TMP/log4" || fail "no message when stopped"
 
+# Fresh generated worlds: the seeds start where asked, the kind follows the seed.
+listed=$(run --gen-seeds 2 --gen-first-seed 101 --only '^gen_' --list | tr '\n' ' ')
+[[ $listed == "gen_corridor_101_none gen_corridor_101_light0.7 gen_building_102_none "* ]] ||
+  fail "--gen-first-seed 101: $listed"
+
 if run --bogus > "$TMP/log3" 2>&1; then fail "--bogus accepted"; fi
 grep -q "unknown option --bogus" "$TMP/log3" || fail "no message for an unknown option"
 echo "matrix.sh: ok"
