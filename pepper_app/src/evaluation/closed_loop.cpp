@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <random>
@@ -276,6 +277,11 @@ class GroundTruthMonitor final : public ReplayMonitor {
     run_.start_lateral_m = tracker_.update(last_pos_).lateral_m;
   }
 
+  /// Ceiling mode: the step's ceiling telemetry (pose in the mosaic, the fix) for the trace.
+  void set_ceiling_telemetry(std::function<nlohmann::json()> f) {
+    ceiling_telemetry_ = std::move(f);
+  }
+
   std::optional<ReplayEnd> after_iteration(const nav::StepResult* step,
                                            const ReplaySample* sample) override {
     RunSample smp;
@@ -365,6 +371,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
       if (step) {
         line["command"] = command_to_json(step->command);
         line["telemetry"] = telemetry_to_json(step->telemetry);
+        if (ceiling_telemetry_) line["ceiling"] = ceiling_telemetry_();
       }
       *trace_ << line.dump() << '\n';
     }
@@ -375,6 +382,7 @@ class GroundTruthMonitor final : public ReplayMonitor {
   const EvaluationOptions& options_;
   RunResult& run_;
   std::ofstream* trace_;
+  std::function<nlohmann::json()> ceiling_telemetry_;
   Polyline taught_;
   PathTracker tracker_;
   double dt_s_;
@@ -417,10 +425,13 @@ RunResult replay_run(const TeachResult& teach,
   std::ofstream trace;
   if (!options.trace_dir.empty()) {
     std::filesystem::create_directories(options.trace_dir);
-    // One file per world, modality, disturbance set and run: several --disturbance
-    // configurations in one evaluation must not overwrite each other's traces.
+    // One file per world, modality (or ceiling mode), disturbance set and run: several
+    // --disturbance configurations in one evaluation must not overwrite each other's traces.
+    const std::string modality = options.mode == core::NavMode::kCeiling
+                                     ? std::string("ceiling")
+                                     : std::string(feature_label(options.features));
     const auto file = options.trace_dir /
-                      (teach.world_name + "_" + std::string(feature_label(options.features)) + "_" +
+                      (teach.world_name + "_" + modality + "_" +
                        disturbance_label(options.disturbances) + "_run" + std::to_string(k + 1) +
                        ".jsonl");
     trace.open(file);
@@ -442,9 +453,11 @@ RunResult replay_run(const TeachResult& teach,
   // The replay loop users run (`replay`, `demo`): its decisions are what is scored here.
   StepFunction step;  // ceiling mode: the ceiling navigator steps the same loop
   if (options.mode == core::NavMode::kCeiling) {
-    step = make_ceiling_replay(robot.mock.get(), 0.0, teach.map_dir, teach.map,
-                               options.head.head_pitch_rad, options.ceiling)
-               .step;
+    CeilingReplay ceiling = make_ceiling_replay(robot.mock.get(), 0.0, teach.map_dir,
+                                                teach.map, options.head.head_pitch_rad,
+                                                options.ceiling);
+    step = std::move(ceiling.step);
+    monitor.set_ceiling_telemetry(std::move(ceiling.telemetry_json));
   }
   const ReplayResult replayed = run_replay_session(robot, teach.map, so, link, step);
   r.tour_complete = replayed.tour_complete;

@@ -6,7 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
 #include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "config/app_config.hpp"
 #include "evaluation/closed_loop.hpp"
@@ -59,6 +63,27 @@ TEST(CeilingClosedLoop, PartOfTheHallTourCompletesNearTheTaughtPath) {
   EXPECT_LT(r.lateral_rms_m, 0.03);
   EXPECT_LT(r.lateral_max_m, 0.08);
   EXPECT_LT(r.final_error_m, 0.15);
+
+  // The same start traced: each frame's line carries the ceiling navigator's telemetry (the
+  // pose in the mosaic, the fix), which the forward telemetry does not have.
+  EvaluationOptions traced = o;
+  traced.trace_dir = tmp.path() / "trace";
+  evaluate(teach, world, traced);
+  std::ifstream trace(traced.trace_dir / (teach.world_name + "_ceiling_none_run1.jsonl"));
+  ASSERT_TRUE(trace);
+  int frames = 0, posed = 0;
+  for (std::string line; std::getline(trace, line);) {
+    const nlohmann::json j = nlohmann::json::parse(line);
+    if (!j.contains("telemetry")) continue;
+    ++frames;
+    ASSERT_TRUE(j.contains("ceiling"));
+    if (j["ceiling"].at("pose_known").get<bool>()) {
+      ++posed;
+      EXPECT_TRUE(j["ceiling"].at("T_mosaic_base").contains("x_m"));
+    }
+  }
+  EXPECT_GT(frames, 100);
+  EXPECT_GT(posed, frames / 2);
 }
 
 }  // namespace
