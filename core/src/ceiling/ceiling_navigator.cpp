@@ -146,13 +146,21 @@ bool CeilingNavigator::arc_segment(int next) const {
                                  r[next - 1].T_mosaic_base.theta_rad)) > options_.arc_min_turn_rad;
 }
 
+bool CeilingNavigator::chord_usable(int next) const {
+  constexpr double kMinChordM = 0.03;
+  const PlanarPose prev_in_next =
+      tour_.relay_images[next].T_mosaic_base.inverse() * tour_.relay_images[next - 1].T_mosaic_base;
+  // IN's heading is +x in its frame; the chord IP -> IN is -prev_in_next.
+  return std::hypot(prev_in_next.x_m, prev_in_next.y_m) >= kMinChordM && prev_in_next.x_m < 0.0;
+}
+
 bool CeilingNavigator::passed(int next, const PlanarPose& T_mosaic_base) const {
   const PlanarPose T_in_mosaic = tour_.relay_images[next].T_mosaic_base.inverse();
   const PlanarPose base_in_next = T_in_mosaic * T_mosaic_base;
   const PlanarPose prev_in_next = T_in_mosaic * tour_.relay_images[next - 1].T_mosaic_base;
-  const double len = std::hypot(prev_in_next.x_m, prev_in_next.y_m);
-  // An arc ends along IN's heading (+x); a chord along IP -> IN, i.e. -prev_in_next.
-  if (arc_segment(next) || len < 1e-6) return base_in_next.x_m >= 0.0;
+  // An arc, or a segment without a usable chord, ends along IN's heading (+x); a chord along
+  // IP -> IN, i.e. -prev_in_next.
+  if (arc_segment(next) || !chord_usable(next)) return base_in_next.x_m >= 0.0;
   return prev_in_next.x_m * base_in_next.x_m + prev_in_next.y_m * base_in_next.y_m <= 0.0;
 }
 
@@ -164,11 +172,15 @@ double CeilingNavigator::demand(const PlanarPose& T_mosaic_base, nav::Telemetry&
   const control::PlanarPose here = to_control(T_in_mosaic * T_mosaic_base);
   const bool arc = arc_segment(next_);
   const double kappa_1_m = arc ? control::arc_curvature(prev) : 0.0;
-  std::optional<control::SegmentDeviation> dev =
-      arc ? control::deviation_from_arc(prev, here) : control::deviation_from_segment(prev, here);
+  std::optional<control::SegmentDeviation> dev;
+  if (arc) {
+    dev = control::deviation_from_arc(prev, here);
+  } else if (chord_usable(next_)) {
+    dev = control::deviation_from_segment(prev, here);
+  }
   if (!dev) {
-    // IP and IN coincide (a turn on the spot was taught) or the robot is at the arc's centre:
-    // no line to follow, only IN's heading.
+    // IP and IN coincide (a turn on the spot was taught), their chord is too short to give a
+    // direction, or the robot is at the arc's centre: no line to follow, only IN's heading.
     dev = control::SegmentDeviation{here.y_m, control::wrap_angle_rad(here.yaw_rad)};
   }
   tel.vnhv_lateral_m = dev->lateral_m;

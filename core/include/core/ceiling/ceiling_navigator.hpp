@@ -136,6 +136,13 @@ class CeilingNavigator {
   /// Whether the pose has passed relay `next` along segment next - 1 -> next.
   bool passed(int next, const PlanarPose& T_mosaic_base) const;
   bool arc_segment(int next) const;
+  /// Whether the chord IP -> IN of a straight segment gives its direction: at least 3 cm long
+  /// and within 90 degrees of IN's taught heading. Shorter, relay poses' noise in the mosaic (a
+  /// few centimetres) can turn it round (room_corridor_room's relays 15 and 16, 1.7 cm apart,
+  /// pointed backwards and the robot turned on the spot into a door frame: docs/method/
+  /// ceiling.md, session 38); then IN's own pose is the reference, as for a turn taught on the
+  /// spot.
+  bool chord_usable(int next) const;
   /// The law's yaw-rate demand on the segment (telemetry filled); v_in_place set when the robot
   /// must turn on the spot.
   double demand(const PlanarPose& T_mosaic_base, navigator::Telemetry& tel, bool& in_place);
