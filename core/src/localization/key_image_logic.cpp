@@ -141,13 +141,13 @@ const std::array<SwitchRule, 6> kSwitchRules{{
    "the paper's rules fire too early on short segments: wait until IN's points appear at "
    "nearly their taught size (unknown size: until the commands drove part of the segment)"},
   {"IN ahead by travel (odometry)", Kind::kGuard,
-   "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
+   "",
    kCriterionGuardBlocked, before_by_odometry,
    "the paper's rules fire early where consecutive key images look alike (a turn taught with "
    "key images a few centimetres apart): wait while the robot's odometry, carried along the "
    "taught path, is 2 sigmas of the estimate along the robot before IN"},
   {"passed IN by travel (odometry)", Kind::kAddition,
-   "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad",
+   "",
    kCriterionPassedByOdometry, passed_by_odometry,
    "the robot's odometry, carried along the taught path, is past IN: when the scale is "
    "unknown at once, when it is known by 2 sigmas of the estimate along the robot (a scene "

@@ -34,6 +34,7 @@ void EstimateErrors::place(const Axes3& sigma) {
     }
   }
   sigma_ = sigma;
+  grown_ = {0.0, 0.0, 0.0};
   begin();
   source(FixSource::kSwitch).in = kNotBegun;
 }
@@ -52,7 +53,10 @@ void EstimateErrors::grow(const Axes3& d_sigma) {
       throw std::invalid_argument("EstimateErrors: a growth must be >= 0 and finite");
     }
   }
-  for (int a = 0; a < 3; ++a) sigma_[a] += d_sigma[a];
+  for (int a = 0; a < 3; ++a) {
+    sigma_[a] += d_sigma[a];
+    grown_[a] += d_sigma[a];
+  }
   for (Source& s : sources_) {
     if (s.in == kNotBegun) continue;
     for (int a = 0; a < 3; ++a) {
@@ -94,6 +98,7 @@ Axes3 EstimateErrors::update(FixSource which, const Axes3& innovation, double we
       other.mixture.rescale(a, before, after[a]);
     }
     sigma_[a] = std::sqrt(after[a]);
+    grown_[a] = 0.0;
   }
   return move;
 }

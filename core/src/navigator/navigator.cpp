@@ -118,8 +118,8 @@ std::vector<std::string> NavigatorOptions::validate() const {
   check(min_scale_pairs >= 1, "min_scale_pairs", min_scale_pairs, ">= 1");
   check(scale_line_max_angle_rad > 0.0 && scale_line_max_angle_rad <= 0.5,
         "scale_line_max_angle_rad", scale_line_max_angle_rad, "in (0, 0.5]");
-  check(dead_reckoning_max_m > 0.0, "dead_reckoning_max_m", dead_reckoning_max_m, "> 0");
-  check(dead_reckoning_max_rad > 0.0, "dead_reckoning_max_rad", dead_reckoning_max_rad, "> 0");
+  check(dead_reckoning_max_lateral_sigma_m > 0.0, "dead_reckoning_max_lateral_sigma_m",
+        dead_reckoning_max_lateral_sigma_m, "> 0");
   check(odometry_steer_max_m > 0.0, "odometry_steer_max_m", odometry_steer_max_m, "> 0");
   check(min_point_texture >= 0.0, "min_point_texture", min_point_texture, ">= 0");
   check(arrival_scale_ratio > 0.0 && arrival_scale_ratio < 2.0, "arrival_scale_ratio",
@@ -1087,7 +1087,7 @@ void Navigator::follow_odometry(const Frame& frame) {
 
 bool Navigator::can_dead_reckon() const {
   return odom_ && tracker_.usable() && tracker_.estimate() && switcher_ &&
-         blind_m_ < options_.dead_reckoning_max_m && blind_rad_ < options_.dead_reckoning_max_rad;
+         errors_.grown()[1] <= options_.dead_reckoning_max_lateral_sigma_m;
 }
 
 double Navigator::odometry_demand(bool& on_the_spot) {
@@ -1301,6 +1301,13 @@ StepResult Navigator::step(const Frame& frame) {
       tel.ip = seg.prev;
       tel.in = seg.next;
       tel.inn = seg.next_next.value_or(-1);
+    }
+    if (odom_ && tracker_.usable() && tracker_.estimate()) {
+      tel.odom_lateral_sigma_grown_m = errors_.grown()[1];
+      if (std::isnan(tel.odom_lateral_sigma_m)) {
+        tel.odom_lateral_sigma_m = lateral_sigma_m();
+        tel.odom_heading_sigma_rad = heading_sigma_rad();
+      }
     }
     tel.timings.total_ms = ms_since(t_start);
     return out;

@@ -62,10 +62,10 @@ const std::array<Transition, 13> kTable{{
    Action::kDrive, S::kNavigating, false,
    "the law's yaw rate through the velocity schedule (speed, turn slow-down, limits)"},
   {Phase::kControl, kNavigatingOrHolding, "odometry on the taught path",
-   "navigator.dead_reckoning_max_m, navigator.dead_reckoning_max_rad", can_dead_reckon,
+   "navigator.dead_reckoning_max_lateral_sigma_m", can_dead_reckon,
    Action::kDeadReckon, S::kDeadReckoning, false,
    "vision sees too little (a blank wall in a turn): drive the taught path on odometry until "
-   "the key images are matched again, within a bounded distance and turn"},
+   "the key images are matched again, while the error it adds across the path stays bounded"},
   {Phase::kControl, kNavigatingOrHolding, "within hold", "navigator.hold_s", within_hold,
    Action::kHold, S::kHolding, false,
    "no usable feature this frame and no odometry: repeat the last command for a short while"},

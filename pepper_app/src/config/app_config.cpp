@@ -34,6 +34,14 @@ const char* removed_key(const std::string& key) {
        "was off (odometry steers where VNHV has no estimate; delete the key)"},
       {"navigator.turn_feedforward_max_lead_rad",
        "removed with the taught-turn feed-forward it capped (delete the key)"},
+      {"navigator.dead_reckoning_max_m",
+       "replaced by navigator.dead_reckoning_max_lateral_sigma_m: driving blind now ends when "
+       "the odometry's error model says the robot may be that far off the path since its "
+       "position across the path was last measured, not after a fixed distance (delete the "
+       "key)"},
+      {"navigator.dead_reckoning_max_rad",
+       "replaced by navigator.dead_reckoning_max_lateral_sigma_m, which counts the turns' "
+       "heading error too (delete the key)"},
       {"ceiling.coast_max_m",
        "replaced by ceiling.coast_max_error_m: coasting now ends when the odometry's error "
        "model says the pose may be that far off, not after a fixed distance (delete the key)"},

@@ -73,6 +73,7 @@ nlohmann::json telemetry_to_json(const core::navigator::Telemetry& t) {
       {"odom_lateral_m", num(t.odom_lateral_m)},
       {"odom_heading_rad", num(t.odom_heading_rad)},
       {"odom_lateral_sigma_m", num(t.odom_lateral_sigma_m)},
+      {"odom_lateral_sigma_grown_m", num(t.odom_lateral_sigma_grown_m)},
       {"odom_past_next_m", num(t.odom_past_next_m)},
       {"odom_along_sigma_m", num(t.odom_along_sigma_m)},
       {"odom_heading_sigma_rad", num(t.odom_heading_sigma_rad)},

@@ -58,7 +58,7 @@ std::shared_ptr<const sim::World> test_world(const std::string& name) {
 // small_room with its east wall bare), taught and replayed on the mock robot with its drifting
 // wheel odometry through the product's sessions. The base must never stop before the end of the
 // tour, vision must drop out in the turn (frames dead reckoned) and come back (re-acquired),
-// the heading from lines must correct the odometry on some frames, and the tour must complete. Without odometry's help (dead_reckoning_max_m ~ 0) the same runs
+// the heading from lines must correct the odometry on some frames, and the tour must complete. Without odometry's help (dead_reckoning_max_lateral_sigma_m ~ 0) the same runs
 // are lost in the turn: the worlds really are blind there.
 void expect_through_blank_turn(const std::string& world_name) {
   const test::TempDir tmp("blank");

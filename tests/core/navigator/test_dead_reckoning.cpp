@@ -152,22 +152,30 @@ TEST(DeadReckoning, TelemetryShowsThePredictionTheFixesAreWeighedAgainst) {
   EXPECT_LT(nearest_r, 0.5);
 }
 
+// Blind from 1 m on: the robot drives on odometry while the error that adds across the path
+// stays within the bound, then stops and says it is lost; every blind frame was within it.
 TEST(DeadReckoning, StopsAndSaysSoWhenVisionNeverComesBack) {
   NavigatorOptions o;
-  o.dead_reckoning_max_m = 0.6;
+  o.dead_reckoning_max_lateral_sigma_m = 0.004;
   const auto blind = [](double travelled_m) { return travelled_m > 1.0; };
   const ClosedLoopRun run = closed_loop(o, blind);
   const StepResult& last = run.steps.back();
   EXPECT_TRUE(last.command.stop);
   EXPECT_EQ(last.command.reason, StopReason::kFeaturesLost);
   EXPECT_EQ(last.telemetry.state, NavState::kLost);
-  EXPECT_GE(last.telemetry.dead_reckoned_m, 0.6);
-  EXPECT_LT(last.telemetry.dead_reckoned_m, 0.7);
-  const auto blind_frames =
-      std::count_if(run.steps.begin(), run.steps.end(), [](const StepResult& r) {
-        return r.telemetry.state == NavState::kDeadReckoning;
-      });
+  EXPECT_GT(last.telemetry.odom_lateral_sigma_grown_m, 0.004);
+  EXPECT_GT(last.telemetry.dead_reckoned_m, 0.1);
+  int blind_frames = 0;
+  for (const StepResult& r : run.steps) {
+    if (r.telemetry.state != NavState::kDeadReckoning) continue;
+    ++blind_frames;
+    EXPECT_LE(r.telemetry.odom_lateral_sigma_grown_m, 0.004) << r.telemetry.frame_index;
+  }
   EXPECT_GT(blind_frames, 3);
+  // A looser bound drives further blind.
+  o.dead_reckoning_max_lateral_sigma_m = 0.008;
+  const ClosedLoopRun further = closed_loop(o, blind);
+  EXPECT_GT(further.steps.back().telemetry.dead_reckoned_m, last.telemetry.dead_reckoned_m);
 }
 
 TEST(DeadReckoning, TheEstimatePastTheFinalPoseEndsTheTourWhereTheImageNeverSaysReached) {

@@ -83,6 +83,32 @@ TEST(EstimateErrors, OdometryGrowsTheSigmasAndEveryBegunModel) {
   EXPECT_THROW(e.grow({-0.01, 0.0, 0.0}), std::invalid_argument);
 }
 
+// What driving added since each axis was last known (the dead-reckoning bound): the odometry's
+// growth adds up; a measurement of an axis clears that axis only; a placement clears all.
+TEST(EstimateErrors, GrownCountsTheOdometrysGrowthSinceEachAxisWasLastSet) {
+  EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
+  e.place({0.1, 0.1, 0.02});
+  EXPECT_EQ(e.grown()[1], 0.0);
+  e.grow({0.01, 0.02, 0.003});
+  e.grow({0.01, 0.03, 0.001});
+  EXPECT_DOUBLE_EQ(e.grown()[0], 0.02);
+  EXPECT_DOUBLE_EQ(e.grown()[1], 0.05);
+  EXPECT_DOUBLE_EQ(e.grown()[2], 0.004);
+  // A heading from lines: the heading is known again, the lateral growth stays.
+  e.model_for(FixSource::kLineYaw, 3);
+  e.update(FixSource::kLineYaw, {kNaN, kNaN, 0.0}, 1.0);
+  EXPECT_EQ(e.grown()[2], 0.0);
+  EXPECT_DOUBLE_EQ(e.grown()[1], 0.05);
+  // The floor lines measure across the path: that growth is cleared, whatever the sigma now.
+  e.model_for(FixSource::kFloorLines, 3);
+  e.update(FixSource::kFloorLines, {kNaN, 0.01, kNaN}, 1.0);
+  EXPECT_EQ(e.grown()[1], 0.0);
+  EXPECT_DOUBLE_EQ(e.grown()[0], 0.02);
+  e.grow({0.01, 0.01, 0.01});
+  e.place({0.5, 0.5, 0.1});
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(e.grown()[a], 0.0) << a;
+}
+
 TEST(EstimateErrors, ALinesModelBeginsAgainForANewInAndAfterBegin) {
   EstimateErrors e(vnhv(), line_yaw(), floor_lines(), switches());
   e.place({0.1, 0.1, 0.02});

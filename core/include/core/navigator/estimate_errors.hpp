@@ -45,6 +45,10 @@ class EstimateErrors {
   /// The odometry moved: each sigma grows by d_sigma (>= 0), and every begun model alike.
   void grow(const Axes3& d_sigma);
   const Axes3& sigma() const { return sigma_; }
+  /// How much each sigma grew with the odometry since its axis was last set by a placement or a
+  /// measurement (update()): the error that driving alone added since the estimate last knew
+  /// that axis (the dead-reckoning bound, NavigatorOptions::dead_reckoning_max_lateral_sigma_m).
+  const Axes3& grown() const { return grown_; }
 
   /// Source `s`'s model for measurements against IN `in` (>= 0; ignored for the VNHV fixes,
   /// whose model begin() begins): a lines' model begins from the sigmas now when it was begun
@@ -79,6 +83,7 @@ class EstimateErrors {
 
   std::array<Source, 4> sources_;
   Axes3 sigma_{0.5, 0.5, 0.1};
+  Axes3 grown_{0.0, 0.0, 0.0};
 };
 
 }  // namespace pepper::core::navigator

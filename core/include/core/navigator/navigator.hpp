@@ -15,7 +15,7 @@
 //                  the taught path is known: the taught path is driven on odometry
 //                  (path_tracker.hpp) while matching goes on every frame; vision takes over
 //                  again as soon as the control law has features, and the switcher advances
-//                  when odometry passes IN. Bounded by dead_reckoning_max_m / _rad.
+//                  when odometry passes IN. Bounded by dead_reckoning_max_lateral_sigma_m.
 //   kLost          the hold (or the dead reckoning) expired: command stop (reason kFeaturesLost) and relocalise over the
 //                  whole map on each frame; back to kNavigating when that succeeds.
 //   kTourComplete  IN was the final image and arrival was seen (key_image_logic.hpp): stop
@@ -151,15 +151,17 @@ struct NavigatorOptions {
   double blind_switch_min_driven_fraction = 0.6;
   double segment_overdue_factor = 6.0;
   double segment_overdue_min_s = 20.0;
-  /// Dead reckoning (issue 29): how far the robot may drive on odometry alone, since vision was
-  /// last usable, before it stops and says it is lost (m, > 0; rad of heading change, > 0).
-  /// Why these: odometry drifts about 2 % of the distance and a few degrees per turn, so 3 m
-  /// stay within about 6 cm of the taught path; a corridor end with a blank wall takes a turn of
-  /// up to 180 degrees (a U-turn) before the next corridor is in view. Measured: the test rooms
-  /// with a bare wall at a 90- and a 180-degree turn (tests/app/evaluation/data/blank_turn_*)
-  /// drove up to 1.93 m blind before vision came back; 2 m left no margin.
-  double dead_reckoning_max_m = 3.0;
-  double dead_reckoning_max_rad = 3.3;
+  /// Dead reckoning (issues 29, 26): the robot drives the taught path on odometry alone while
+  /// the error that driving added to the estimate across the path, since the estimate's lateral
+  /// position was last measured (a VNHV fix, the floor lines) or placed, stays within this (m,
+  /// > 0): the estimate's modelled lateral sigma grown by the odometry's error bounds
+  /// (core/odometry.hpp: 3 % of the distance, 0.05 rad per radian turned and 0.01 rad per metre
+  /// of heading, the heading error carried over the distance), EstimateErrors::grown(). Beyond
+  /// it the robot stops and says it is lost. One bound for distance and turns together, in the
+  /// unit that matters (how far off the path the robot may be), and not reset by a frame that
+  /// merely sees a few lines (no measurement). Why 0.3 m: docs/method/navigator.md "Dead
+  /// reckoning through blind stretches".
+  double dead_reckoning_max_lateral_sigma_m = 0.3;
   /// Odometry steering (issue 26): where VNHV has no estimate but the image still has features,
   /// VNHV's law on the odometry's deviation from the taught path steers instead of IBVS while
   /// the last vision fix is at most this far behind (m of odometry, > 0). Not the blind bound:

@@ -112,9 +112,14 @@ struct Telemetry {
   /// fix neither corrects the VNHV filter nor counts as the robot located.
   double vnhv_fix_room_probability = kNaN;
   /// The odometry estimate's deviation from the current segment (the prediction the fixes are
-  /// gated against) and its sigmas across and in heading; NaN without an odometry estimate.
+  /// gated against) and its sigmas across and in heading (at that gate on frames with a fix,
+  /// else at the end of the step); NaN without an odometry estimate.
   double odom_lateral_m = kNaN, odom_heading_rad = kNaN;
   double odom_lateral_sigma_m = kNaN, odom_heading_sigma_rad = kNaN;
+  /// How much of the lateral sigma the odometry added since the lateral position was last
+  /// measured or placed (EstimateErrors::grown; the dead-reckoning bound
+  /// NavigatorOptions::dead_reckoning_max_lateral_sigma_m); NaN without an odometry estimate.
+  double odom_lateral_sigma_grown_m = kNaN;
   /// The odometry estimate's distance along the taught path past IN (m, < 0 before it; when IN
   /// is the final key image, along its taught heading, so also > 0 past the end) and its sigma
   /// along the robot; NaN without an odometry estimate.
