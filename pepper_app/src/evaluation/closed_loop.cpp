@@ -255,6 +255,12 @@ naoqi_bridge::CameraRequest camera_request(const EvaluationOptions& options) {
 
 namespace {
 
+/// What the robot navigates by, as the evaluation reports it and names its traces: "ceiling" in
+/// ceiling mode, else the forward modality (feature_label).
+std::string navigates_by(const EvaluationOptions& options) {
+  return options.mode == core::NavMode::kCeiling ? "ceiling" : feature_label(options.features);
+}
+
 /// The evaluation's view of a replay: ground truth per loop iteration (also for dropped frames,
 /// when the base keeps the command in force), the trace, and the ends that only ground truth can
 /// see (left the path, drove past its end, out of time).
@@ -427,11 +433,8 @@ RunResult replay_run(const TeachResult& teach,
     std::filesystem::create_directories(options.trace_dir);
     // One file per world, modality (or ceiling mode), disturbance set and run: several
     // --disturbance configurations in one evaluation must not overwrite each other's traces.
-    const std::string modality = options.mode == core::NavMode::kCeiling
-                                     ? std::string("ceiling")
-                                     : std::string(feature_label(options.features));
     const auto file = options.trace_dir /
-                      (teach.world_name + "_" + modality + "_" +
+                      (teach.world_name + "_" + navigates_by(options) + "_" +
                        disturbance_label(options.disturbances) + "_run" + std::to_string(k + 1) +
                        ".jsonl");
     trace.open(file);
@@ -581,7 +584,7 @@ Evaluation evaluate(const TeachResult& teach, const std::shared_ptr<const sim::W
   ev.world_name = world->name;
   ev.mode = core::to_string(options.mode);
   const bool ceiling = options.mode == core::NavMode::kCeiling;
-  ev.features = ceiling ? "ceiling" : feature_label(options.features);
+  ev.features = navigates_by(options);
   ev.controller = ceiling ? "vnhv" : core::navigator::to_string(options.navigator.controller);
   ev.size = std::to_string(options.width_px) + "x" + std::to_string(options.height_px);
   ev.lens = lens_label(options);
